@@ -1,0 +1,161 @@
+// Inverse kinematics of one finger's contact point (eq. 3: theta_dot = J_F^-1 x_dot).
+//
+// J_F is the m x n Jacobian of the CONTACT POINT (kinematics/finger_chain.hpp), m = Dim.
+//   m = n: exact inverse; n > m: minimum-norm pseudo-inverse; n < m: least squares.
+// Near a singularity (sigma_min < DampingSchedule::singular_threshold) the damped
+// least-squares solution of math/damped_least_squares.hpp is used and the status says
+// `damped`; |theta_dot| <= gain_bound() * |x_dot| always holds.
+// Redundant fingers (n > m) may add a joint-velocity preference z projected onto the
+// null space: theta_dot += (I - J^+ J) z.
+// Joint-velocity limits: if any |theta_dot_i| exceeds its limit, the WHOLE vector is
+// scaled by the largest factor s in (0, 1] that respects every limit, so the direction
+// of the Cartesian motion is kept; the status says `limited` and reports s.
+// Invalid input (non-finite J, x_dot, limits or z): theta_dot = 0, status invalid_input.
+// Units: x_dot in m/s, theta_dot in rad/s. noexcept; fixed sizes never allocate.
+#pragma once
+
+#include <cmath>
+
+#include "inhand/math/damped_least_squares.hpp"
+
+namespace inhand {
+
+/// Bit flags of an IK solve. `ok` is 0; damped and limited may be combined.
+enum class IkStatus : unsigned {
+  ok = 0,
+  damped = 1u << 0,       ///< sigma_min below the threshold: damped least squares used
+  limited = 1u << 1,      ///< joint velocities scaled down to respect their limits
+  damped_and_limited = 3u,
+  invalid_input = 1u << 2,  ///< non-finite input; output is zero
+};
+constexpr IkStatus operator|(IkStatus a, IkStatus b) noexcept {
+  return static_cast<IkStatus>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
+}
+constexpr bool has(IkStatus s, IkStatus flag) noexcept {
+  return (static_cast<unsigned>(s) & static_cast<unsigned>(flag)) != 0u;
+}
+inline const char* to_string(IkStatus s) noexcept {
+  switch (s) {
+    case IkStatus::ok: return "ok";
+    case IkStatus::damped: return "damped";
+    case IkStatus::limited: return "limited";
+    case IkStatus::damped_and_limited: return "damped_and_limited";
+    case IkStatus::invalid_input: return "invalid_input";
+  }
+  return "unknown";
+}
+
+template <typename Scalar>
+struct IkReport {
+  IkStatus status = IkStatus::ok;
+  Scalar min_singular_value = Scalar(0);  ///< sigma_min of J (m/rad)
+  Scalar damping = Scalar(0);             ///< lambda used (0 when not damped)
+  Scalar limit_scale = Scalar(1);         ///< s applied for the velocity limits
+};
+
+template <typename Scalar>
+struct IkParams {
+  DampingSchedule<Scalar> damping{};
+  Validation validate() const noexcept { return damping.validate(); }
+};
+
+/// Contact-point IK for a Dim x Dof Jacobian. Dof and MaxDof follow FingerChain:
+/// exact, run-time bounded (Dynamic, MaxDof), or run-time unbounded (Dynamic, Dynamic).
+template <typename Scalar, int Dim, int Dof, int MaxDof = Dof>
+class ContactIk {
+  static constexpr int N = Dof;
+  static constexpr int MaxN = MaxDof;
+
+ public:
+  using Jacobian = Eigen::Matrix<Scalar, Dim, N, Eigen::ColMajor, Dim, MaxN>;
+  using CartesianVector = Eigen::Matrix<Scalar, Dim, 1>;
+  using JointVector = Eigen::Matrix<Scalar, N, 1, Eigen::ColMajor, MaxN, 1>;
+  using PseudoInverse = Eigen::Matrix<Scalar, N, Dim, Eigen::ColMajor, MaxN, Dim>;
+
+  explicit ContactIk(int dof = (N == Eigen::Dynamic ? 0 : N), const IkParams<Scalar>& params = {})
+      : params_(params), dls_(dof), ns_(dof), pinv_(dof, Dim) {}
+
+  void set_params(const IkParams<Scalar>& p) noexcept { params_ = p; }
+  const IkParams<Scalar>& params() const noexcept { return params_; }
+  int dof() const noexcept { return dls_.cols(); }
+
+  /// theta_dot for contact velocity x_dot; `max_velocity` holds the per-joint limits
+  /// (rad/s, > 0; +inf for none).
+  IkReport<Scalar> solve(const Jacobian& J, const CartesianVector& x_dot,
+                         const JointVector& max_velocity, JointVector& theta_dot) noexcept {
+    return solve_impl(J, x_dot, max_velocity, nullptr, theta_dot);
+  }
+  /// As solve(), adding the null-space projection of `null_space_velocity` (n > m only;
+  /// for n <= m the null space is empty and the term is ignored).
+  IkReport<Scalar> solve(const Jacobian& J, const CartesianVector& x_dot,
+                         const JointVector& max_velocity, const JointVector& null_space_velocity,
+                         JointVector& theta_dot) noexcept {
+    return solve_impl(J, x_dot, max_velocity, &null_space_velocity, theta_dot);
+  }
+
+  /// The (damped, per the schedule) pseudo-inverse J^+ that solve() applies.
+  IkReport<Scalar> pseudo_inverse(const Jacobian& J, PseudoInverse& out) noexcept {
+    IkReport<Scalar> report;
+    const auto f = dls_.factorize(J, params_.damping);
+    if (!f.valid) {
+      out.setZero();
+      report.status = IkStatus::invalid_input;
+      return report;
+    }
+    report.min_singular_value = f.min_singular_value;
+    report.damping = f.damping;
+    if (f.damped) report.status = IkStatus::damped;
+    dls_.pseudo_inverse(J, out);
+    return report;
+  }
+
+  /// Upper bound of |theta_dot| / |x_dot| before velocity limiting (no null-space term).
+  Scalar gain_bound() const noexcept { return params_.damping.gain_bound(); }
+
+ private:
+  IkReport<Scalar> solve_impl(const Jacobian& J, const CartesianVector& x_dot,
+                              const JointVector& max_velocity, const JointVector* z,
+                              JointVector& theta_dot) noexcept {
+    IkReport<Scalar> report;
+    if (!all_finite(J) || !all_finite(x_dot) || (z != nullptr && !all_finite(*z)) ||
+        !((max_velocity.array() > Scalar(0)).all()) || max_velocity.hasNaN()) {
+      theta_dot.setZero();
+      report.status = IkStatus::invalid_input;
+      return report;
+    }
+    const auto f = dls_.factorize(J, params_.damping);
+    if (!f.valid) {
+      theta_dot.setZero();
+      report.status = IkStatus::invalid_input;
+      return report;
+    }
+    report.min_singular_value = f.min_singular_value;
+    report.damping = f.damping;
+    if (f.damped) report.status = report.status | IkStatus::damped;
+    dls_.solve(J, x_dot, theta_dot);
+    if (z != nullptr && dls_.cols() > Dim) {
+      dls_.pseudo_inverse(J, pinv_);
+      // theta_dot += (I - J^+ J) z, evaluated as z - J^+ (J z): no n x n temporary.
+      ns_.noalias() = pinv_ * (J * (*z));
+      theta_dot += *z - ns_;
+    }
+    Scalar s = Scalar(1);
+    for (int i = 0; i < theta_dot.size(); ++i) {
+      const Scalar a = std::abs(theta_dot(i));
+      if (a > max_velocity(i)) s = std::min(s, max_velocity(i) / a);
+    }
+    if (s < Scalar(1)) {
+      theta_dot *= s;
+      report.status = report.status | IkStatus::limited;
+    }
+    report.limit_scale = s;
+    return report;
+  }
+
+  IkParams<Scalar> params_;
+  DampedLeastSquares<Scalar, Dim, N, MaxN> dls_;
+  JointVector ns_;
+  PseudoInverse pinv_;
+};
+
+}  // namespace inhand

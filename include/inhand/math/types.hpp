@@ -1,0 +1,67 @@
+// Spatial types shared by every layer.
+//
+// Conventions (the whole library):
+//  - Units: SI. Metres, radians, seconds, newtons; velocities in m/s and rad/s.
+//  - Frames: every vector handed to or returned by inhand is expressed in the
+//    world ("reference", O_r in the paper) frame unless its name says otherwise.
+//  - Dim is the spatial dimension: 3 for a spatial hand, 2 for a planar hand
+//    working in the world x-y plane (rotations about +z, counter-clockwise
+//    positive).
+//  - A twist stacks linear velocity of the object reference point, then
+//    angular velocity: spatial (vx, vy, vz, wx, wy, wz), planar (vx, vy, wz).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <type_traits>
+
+namespace inhand {
+
+/// Compile-time facts about a spatial dimension (2 = planar, 3 = spatial).
+template <int Dim>
+struct SpatialDim {
+  static_assert(Dim == 2 || Dim == 3, "inhand supports planar (2) and spatial (3) hands");
+  /// Number of rotational degrees of freedom: 1 in the plane, 3 in space.
+  static constexpr int kRot = (Dim == 2) ? 1 : 3;
+  /// Size of a twist / pose-error vector.
+  static constexpr int kTwist = Dim + kRot;
+};
+
+template <typename Scalar, int Dim>
+using Vector = Eigen::Matrix<Scalar, Dim, 1>;
+template <typename Scalar, int Dim>
+using Rotation = Eigen::Matrix<Scalar, Dim, Dim>;
+/// Angular quantity: a scalar (as 1-vector) in the plane, a 3-vector in space.
+template <typename Scalar, int Dim>
+using AngularVector = Eigen::Matrix<Scalar, SpatialDim<Dim>::kRot, 1>;
+/// Twist (linear; angular), see the file comment for the layout.
+template <typename Scalar, int Dim>
+using Twist = Eigen::Matrix<Scalar, SpatialDim<Dim>::kTwist, 1>;
+
+/// omega x r, the velocity of a point at offset r on a body rotating with omega.
+/// Planar: omega is the scalar rate about +z, result is omega * (-r_y, r_x).
+template <typename Scalar>
+inline Vector<Scalar, 3> angular_cross(const AngularVector<Scalar, 3>& omega,
+                                       const Vector<Scalar, 3>& r) noexcept {
+  return omega.cross(r);
+}
+template <typename Scalar>
+inline Vector<Scalar, 2> angular_cross(const AngularVector<Scalar, 2>& omega,
+                                       const Vector<Scalar, 2>& r) noexcept {
+  return Vector<Scalar, 2>(-omega(0) * r.y(), omega(0) * r.x());
+}
+
+/// True when every coefficient is finite (no NaN, no +-inf).
+template <typename Derived>
+inline bool all_finite(const Eigen::MatrixBase<Derived>& m) noexcept {
+  // (x - x) == 0 is false exactly for NaN and +-inf, and does not raise FE_INVALID
+  // for quiet NaN on IEEE hardware.
+  return ((m.derived().array() - m.derived().array()) == 0).all();
+}
+template <typename Scalar, typename = std::enable_if_t<std::is_floating_point<Scalar>::value>>
+inline bool is_finite(Scalar x) noexcept {
+  return (x - x) == Scalar(0);
+}
+
+}  // namespace inhand
