@@ -15,3 +15,7 @@
 #include "inhand/kinematics/finger_chain.hpp"
 #include "inhand/controller/ik.hpp"
 #include "inhand/controller/servo.hpp"
+#include "inhand/controller/trajectory.hpp"
+#include "inhand/controller/force_planner.hpp"
+#include "inhand/controller/grasp.hpp"
+#include "inhand/controller/reactive_controller.hpp"

@@ -73,7 +73,16 @@ class ContactIk {
   using PseudoInverse = Eigen::Matrix<Scalar, N, Dim, Eigen::ColMajor, MaxN, Dim>;
 
   explicit ContactIk(int dof = (N == Eigen::Dynamic ? 0 : N), const IkParams<Scalar>& params = {})
-      : params_(params), dls_(dof), ns_(dof), pinv_(dof, Dim) {}
+      : params_(params), dls_(dof) {
+    ns_.setZero(dof);
+    pinv_.setZero(dof, Dim);
+  }
+  /// Re-sizes in place for a finger with `dof` joints (run-time DOF only).
+  void set_dof(int dof) {
+    dls_.set_cols(dof);
+    ns_.setZero(dof);
+    pinv_.setZero(dof, Dim);
+  }
 
   void set_params(const IkParams<Scalar>& p) noexcept { params_ = p; }
   const IkParams<Scalar>& params() const noexcept { return params_; }

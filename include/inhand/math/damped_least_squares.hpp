@@ -14,7 +14,6 @@
 // Fixed sizes never allocate; Eigen::Dynamic allocates only at construction.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -60,17 +59,21 @@ struct DampingSchedule {
   }
 };
 
-/// Solver with preallocated workspace for an M x N matrix. N may be Eigen::Dynamic,
-/// with MaxN a fixed capacity (no allocation) or Eigen::Dynamic (heap, sized once).
+/// Solver for an M x N matrix with M <= 3 (a contact Jacobian: M = Dim). N may be
+/// Eigen::Dynamic, with MaxN a fixed capacity or Eigen::Dynamic. Because k = min(M, N)
+/// <= 3, the k x k Gram matrix, its eigenvalues (closed form) and its Cholesky factor
+/// live in fixed 3 x 3 storage: no allocation in any size mode.
+/// Accuracy: sigma_min comes from the Gram matrix, so it is resolved down to about
+/// sqrt(machine epsilon) * sigma_max; smaller values read as roughly that floor, far
+/// inside the damped region (the schedule treats both alike).
 template <typename Scalar, int M, int N, int MaxN = N>
 class DampedLeastSquares {
+  static_assert(M >= 1 && M <= 3, "contact Jacobians have 1 to 3 rows");
+
  public:
-  static constexpr int K = (N == Eigen::Dynamic) ? Eigen::Dynamic : (M < N ? M : N);
-  static constexpr int MaxK = (MaxN == Eigen::Dynamic) ? Eigen::Dynamic : (M < MaxN ? M : MaxN);
   using Matrix = Eigen::Matrix<Scalar, M, N, Eigen::ColMajor, M, MaxN>;
   using Rhs = Eigen::Matrix<Scalar, M, 1>;
   using Solution = Eigen::Matrix<Scalar, N, 1, Eigen::ColMajor, MaxN, 1>;
-  using Gram = Eigen::Matrix<Scalar, K, K, Eigen::ColMajor, MaxK, MaxK>;
   using Inverse = Eigen::Matrix<Scalar, N, M, Eigen::ColMajor, MaxN, M>;
 
   struct Result {
@@ -80,41 +83,37 @@ class DampedLeastSquares {
     bool valid = false;  ///< false: non-finite matrix, solution set to zero
   };
 
-  explicit DampedLeastSquares(int n = (N == Eigen::Dynamic ? 0 : N))
-      : n_(n),
-        k_(std::min(M, n)),
-        gram_(k_, k_),
-        eig_(k_),
-        llt_(k_),
-        tmp_k_(k_),
-        tmp_k2_(k_) {}
+  explicit DampedLeastSquares(int n = (N == Eigen::Dynamic ? 0 : N)) { set_cols(n); }
 
   int cols() const noexcept { return n_; }
+  /// Sets the column count (run-time N only); never allocates.
+  void set_cols(int n) noexcept {
+    n_ = n;
+    k_ = n < M ? n : M;
+    gram_.setZero();
+    chol_.setZero();
+    factored_ = false;
+  }
 
   /// Factorises J (Gram matrix, singular values, damping). Must precede solve().
   Result factorize(const Matrix& J, const DampingSchedule<Scalar>& schedule) noexcept {
     Result r;
-    if (!all_finite(J)) {
-      factored_ = false;
-      return r;
-    }
+    factored_ = false;
+    if (!all_finite(J) || k_ < 1) return r;
     wide_ = n_ >= M;
     if (wide_) {
-      gram_.noalias() = J * J.transpose();
+      gram_.template topLeftCorner<M, M>().noalias() = J * J.transpose();
     } else {
-      gram_.noalias() = J.transpose() * J;
+      for (int a = 0; a < k_; ++a)
+        for (int b = a; b < k_; ++b) gram_(a, b) = gram_(b, a) = J.col(a).dot(J.col(b));
     }
-    compute_eigenvalues();
-    Scalar mu_min = eig_.eigenvalues()(0);  // ascending order
-    if (mu_min < Scalar(0)) mu_min = Scalar(0);
+    Scalar mu_min = smallest_eigenvalue();
+    if (!(mu_min > Scalar(0))) mu_min = Scalar(0);
     r.min_singular_value = std::sqrt(mu_min);
     const Scalar l2 = schedule.damping_squared(r.min_singular_value);
     r.damping = std::sqrt(l2);
     r.damped = l2 > Scalar(0);
-    r.valid = true;
-    gram_.diagonal().array() += l2;
-    llt_.compute(gram_);
-    factored_ = llt_.info() == Eigen::Success;
+    factored_ = cholesky(l2);
     r.valid = factored_;
     return r;
   }
@@ -122,16 +121,18 @@ class DampedLeastSquares {
   /// x = J^+_lambda b for the last factorised J. Writes zero if not factorised.
   void solve(const Matrix& J, const Rhs& b, Solution& x) noexcept {
     if (!factored_) {
-      x.setZero();
+      x.setZero(n_);
       return;
     }
+    Eigen::Matrix<Scalar, 3, 1> y;
     if (wide_) {
-      tmp_k_ = llt_.solve(b);
-      x.noalias() = J.transpose() * tmp_k_;
+      y.template head<M>() = b;
+      cholesky_solve(y);
+      x.noalias() = J.transpose() * y.template head<M>();
     } else {
-      tmp_k2_.noalias() = J.transpose() * b;
-      tmp_k_ = llt_.solve(tmp_k2_);
-      x = tmp_k_;
+      for (int a = 0; a < k_; ++a) y(a) = J.col(a).dot(b);
+      cholesky_solve(y);
+      x = y.head(k_);
     }
   }
 
@@ -142,31 +143,80 @@ class DampedLeastSquares {
       out.setZero();
       return;
     }
-    if (wide_) {
-      out.noalias() = J.transpose() * llt_.solve(Gram::Identity(k_, k_));
-    } else {
-      out.noalias() = llt_.solve(J.transpose());
+    Eigen::Matrix<Scalar, 3, 1> y;
+    if (wide_) {  // J^T (G + l^2 I)^-1, column by column of the inverse
+      Eigen::Matrix<Scalar, M, M> inv;
+      for (int c = 0; c < M; ++c) {
+        y.setZero();
+        y(c) = Scalar(1);
+        cholesky_solve(y);
+        inv.col(c) = y.template head<M>();
+      }
+      out.noalias() = J.transpose() * inv;
+    } else {  // (G + l^2 I)^-1 J^T
+      for (int c = 0; c < M; ++c) {
+        for (int a = 0; a < k_; ++a) y(a) = J(c, a);
+        cholesky_solve(y);
+        out.col(c) = y.head(k_);
+      }
     }
   }
 
  private:
-  void compute_eigenvalues() noexcept {
-    if constexpr (K == 2 || K == 3) {
-      eig_.computeDirect(gram_, Eigen::EigenvaluesOnly);
-    } else {
-      eig_.compute(gram_, Eigen::EigenvaluesOnly);
+  /// Smallest eigenvalue of the leading k x k block of the (symmetric) Gram matrix.
+  Scalar smallest_eigenvalue() const noexcept {
+    if (k_ == 1) return gram_(0, 0);
+    if (k_ == 2) {
+      const Scalar a = gram_(0, 0), b = gram_(0, 1), d = gram_(1, 1);
+      const Scalar mean = Scalar(0.5) * (a + d);
+      const Scalar half = std::hypot(Scalar(0.5) * (a - d), b);
+      // mean - half cancels for near-singular blocks; det / larger root does not.
+      const Scalar big = mean + half;
+      return big > Scalar(0) ? (a * d - b * b) / big : Scalar(0);
+    }
+    Eigen::Matrix<Scalar, 3, 1> ev;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 3, 3>> eig;
+    eig.computeDirect(gram_, Eigen::EigenvaluesOnly);
+    ev = eig.eigenvalues();
+    return ev(0);
+  }
+
+  /// Cholesky of the leading k x k block of G + l2 I into chol_ (lower). false if
+  /// not positive definite (only possible for a rank-deficient J with l2 == 0).
+  bool cholesky(Scalar l2) noexcept {
+    for (int c = 0; c < k_; ++c) {
+      Scalar d = gram_(c, c) + l2;
+      for (int p = 0; p < c; ++p) d -= chol_(c, p) * chol_(c, p);
+      if (!(d > Scalar(0))) return false;
+      d = std::sqrt(d);
+      chol_(c, c) = d;
+      for (int r = c + 1; r < k_; ++r) {
+        Scalar v = gram_(r, c);
+        for (int p = 0; p < c; ++p) v -= chol_(r, p) * chol_(c, p);
+        chol_(r, c) = v / d;
+      }
+    }
+    return true;
+  }
+  void cholesky_solve(Eigen::Matrix<Scalar, 3, 1>& y) const noexcept {
+    for (int r = 0; r < k_; ++r) {
+      Scalar v = y(r);
+      for (int p = 0; p < r; ++p) v -= chol_(r, p) * y(p);
+      y(r) = v / chol_(r, r);
+    }
+    for (int r = k_ - 1; r >= 0; --r) {
+      Scalar v = y(r);
+      for (int p = r + 1; p < k_; ++p) v -= chol_(p, r) * y(p);
+      y(r) = v / chol_(r, r);
     }
   }
 
-  int n_;
-  int k_;
+  int n_ = 0;
+  int k_ = 0;
   bool wide_ = true;
   bool factored_ = false;
-  Gram gram_;
-  Eigen::SelfAdjointEigenSolver<Gram> eig_;
-  Eigen::LLT<Gram> llt_;
-  Eigen::Matrix<Scalar, K, 1, Eigen::ColMajor, MaxK, 1> tmp_k_;
-  Eigen::Matrix<Scalar, K, 1, Eigen::ColMajor, MaxK, 1> tmp_k2_;
+  Eigen::Matrix<Scalar, 3, 3> gram_;
+  Eigen::Matrix<Scalar, 3, 3> chol_;
 };
 
 }  // namespace inhand

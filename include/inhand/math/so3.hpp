@@ -130,7 +130,14 @@ inline Vector<Scalar, 3> euler_from_rotation(const Rotation<Scalar, 3>& R) noexc
   if (cth < Scalar(16) * Eigen::NumTraits<Scalar>::epsilon()) {
     return Vector<Scalar, 3>(Scalar(0), theta, std::atan2(-R(0, 1), R(1, 1)));
   }
-  return Vector<Scalar, 3>(std::atan2(R(2, 1), R(2, 2)), theta, std::atan2(R(1, 0), R(0, 0)));
+  const Scalar psi = std::atan2(R(1, 0), R(0, 0));
+  // phi is read from Rz(psi)^T R = Ry(theta) Rx(phi), whose entries (1,1) = cos(phi) and
+  // (1,2) = -sin(phi) are O(1). Reading it from R(2,1), R(2,2) (both ~cos(theta))
+  // instead loses eps / cos(theta) near gimbal lock, and the returned angles would
+  // no longer reproduce R; this way the error in psi is compensated in phi.
+  const Scalar cps = std::cos(psi), sps = std::sin(psi);
+  const Scalar phi = std::atan2(sps * R(0, 2) - cps * R(1, 2), cps * R(1, 1) - sps * R(0, 1));
+  return Vector<Scalar, 3>(phi, theta, psi);
 }
 
 /// Rate matrix E: omega_world = E(rpy) * rpy_dot. Columns are the world-frame axes

@@ -1,0 +1,95 @@
+// The grasp phase (method.md section 8) and the per-finger contact states.
+//
+// Grasp (object frozen by the simulator or held by a fixture): every finger moves a
+// virtual contact point on its fingertip, p_v = fingertip centre - radius * n_t, towards
+// its desired contact point p_t, where n_t is the EXPECTED outward object normal at p_t
+// (the approach direction is -n_t). Because the geometry is unknown, the finger keeps
+// creeping along -n_t at `creep_speed` after reaching p_t until tactile sensing reports
+// contact. On contact the actual contact point is recorded and the finger presses with
+// the nominal force (force servo along the measured normal) while its contact point is
+// drawn tangentially towards p_t with `tangential_gain`. The grasp is complete once
+// every finger touches with |f - f_nominal| <= force_tolerance * f_nominal for
+// `settle_time` seconds.
+// During manipulation a finger that loses contact re-approaches along its last
+// measured normal, aiming at its last contact point carried rigidly with the measured
+// object pose, and is reported as `reacquiring` until it touches again.
+// Units: m, m/s, s; all points and normals in the world frame.
+#pragma once
+
+#include "inhand/math/status.hpp"
+#include "inhand/math/types.hpp"
+
+namespace inhand {
+
+/// What a finger is doing this tick.
+enum class FingerState : unsigned char {
+  idle,         ///< no task: zero joint velocity
+  approaching,  ///< grasp phase, moving towards its desired contact point
+  pressing,     ///< grasp phase, touching, servoing to the nominal force
+  in_contact,   ///< manipulation, touching: hybrid servo on eq. 2 + planned force
+  reacquiring,  ///< manipulation, contact lost: re-approaching along the last normal
+};
+inline const char* to_string(FingerState s) noexcept {
+  switch (s) {
+    case FingerState::idle: return "idle";
+    case FingerState::approaching: return "approaching";
+    case FingerState::pressing: return "pressing";
+    case FingerState::in_contact: return "in_contact";
+    case FingerState::reacquiring: return "reacquiring";
+  }
+  return "unknown";
+}
+
+template <typename Scalar>
+struct GraspParams {
+  Scalar approach_gain = Scalar(4);       ///< 1/s, proportional gain towards the target
+  Scalar approach_speed = Scalar(0.03);   ///< m/s, cap on the approach velocity
+  Scalar creep_speed = Scalar(0.005);     ///< m/s along -n until contact is sensed
+  Scalar tangential_gain = Scalar(1);     ///< 1/s, pressing: tangential pull to the target
+  Scalar force_tolerance = Scalar(0.1);   ///< relative, grasp-complete criterion
+  Scalar settle_time = Scalar(0.1);       ///< s the criterion must hold
+
+  Validation validate() const noexcept {
+    if (!is_finite(approach_gain) || !(approach_gain > Scalar(0)))
+      return Validation::invalid("grasp.approach_gain", "must be finite and > 0");
+    if (!is_finite(approach_speed) || !(approach_speed > Scalar(0)))
+      return Validation::invalid("grasp.approach_speed", "must be finite and > 0");
+    if (!is_finite(creep_speed) || !(creep_speed > Scalar(0)) || creep_speed > approach_speed)
+      return Validation::invalid("grasp.creep_speed", "must be finite, > 0 and <= approach_speed");
+    if (!is_finite(tangential_gain) || !(tangential_gain >= Scalar(0)))
+      return Validation::invalid("grasp.tangential_gain", "must be finite and >= 0");
+    if (!is_finite(force_tolerance) || !(force_tolerance > Scalar(0)))
+      return Validation::invalid("grasp.force_tolerance", "must be finite and > 0");
+    if (!is_finite(settle_time) || !(settle_time >= Scalar(0)))
+      return Validation::invalid("grasp.settle_time", "must be finite and >= 0");
+    return Validation::valid();
+  }
+};
+
+/// Desired contact point and expected outward normal for one finger (world frame).
+template <typename Scalar, int Dim>
+struct GraspTarget {
+  Vector<Scalar, Dim> contact_point = Vector<Scalar, Dim>::Zero();
+  Vector<Scalar, Dim> normal = Vector<Scalar, Dim>::UnitX();  ///< unit, out of the object
+
+  Validation validate() const noexcept {
+    if (!all_finite(contact_point)) return Validation::invalid("grasp_target.contact_point", "must be finite");
+    if (!all_finite(normal) || !(normal.norm() > Scalar(0.5)) || !(normal.norm() < Scalar(1.5)))
+      return Validation::invalid("grasp_target.normal", "must be a finite unit vector");
+    return Validation::valid();
+  }
+};
+
+/// Approach velocity of a virtual contact point p_v towards target p_t with the
+/// expected outward normal n: saturated P term plus creep along -n.
+template <typename Scalar, int Dim>
+inline Vector<Scalar, Dim> approach_velocity(const GraspParams<Scalar>& g, const Vector<Scalar, Dim>& p_v,
+                                             const Vector<Scalar, Dim>& p_t,
+                                             const Vector<Scalar, Dim>& n) noexcept {
+  Vector<Scalar, Dim> v = g.approach_gain * (p_t - p_v);
+  const Scalar speed = v.norm();
+  if (speed > g.approach_speed) v *= g.approach_speed / speed;
+  return v - g.creep_speed * n;
+}
+
+}  // namespace inhand

@@ -1,0 +1,644 @@
+// The reactive in-hand manipulation controller: one update() per control tick
+// (method.md section 7, paper Fig. 2).
+//
+//   layer 1  trajectory : desired object pose X_d(t) (controller/trajectory.hpp) and
+//                         the commanded object twist
+//                           V = V_ff + diag(k_p I, k_r I) * pose_error(X_d, X_measured)
+//                         (feed-forward plus feedback on the MEASURED pose, method.md s.3)
+//   layer 2  per finger : desired contact-point velocity v_i = v + w x (p_ci - p_o)
+//                         (eq. 2 at the MEASURED contact point p_ci) and the desired
+//                         normal force f_i from the force planner (section 5)
+//   layer 3  per finger : hybrid servo e = g1(v_i) - g2(f_i - f_i,measured) n_i
+//                         (eqs. 4-7) and theta_dot = J_F^+ e (eq. 3)
+// Frames and units: world frame, SI. Contact normals n are the object's OUTWARD unit
+// normals (towards the fingertip); forces are normal-force magnitudes >= 0 in newtons.
+// Twists are (linear velocity of the object reference point ; angular velocity).
+//
+// Real-time contract: update() is noexcept, allocates nothing (fixed NumFingers and
+// fixed or bounded DOF), never prints. Invalid input (non-finite or malformed) makes
+// update() return ControllerStatus::invalid_input with `output.fault` naming the field
+// and finger; the output is then the documented fallback: zero joint velocity for every
+// finger, and no internal state changes (integrators, filters, time are frozen), so
+// the next valid tick resumes where the last valid one ended.
+//
+// Phases, driven by the user: configure() -> start_grasp(targets) -> update() ...
+// returns `grasped` once every finger presses with the nominal force -> the user
+// releases the object and calls start_manipulation(trajectory) -> update() tracks it.
+// Mixed-DOF hands: use Dof = inhand::Dynamic with MaxDof the largest finger (e.g. a
+// 5-joint thumb and 4-joint fingers: Dof = Dynamic, MaxDof = 5): still no allocation.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <type_traits>
+#include <vector>
+
+#include "inhand/controller/force_planner.hpp"
+#include "inhand/controller/grasp.hpp"
+#include "inhand/controller/ik.hpp"
+#include "inhand/controller/servo.hpp"
+#include "inhand/controller/trajectory.hpp"
+#include "inhand/kinematics/contact_kinematics.hpp"
+#include "inhand/kinematics/finger_chain.hpp"
+
+namespace inhand {
+
+/// Overall result of one update().
+enum class ControllerStatus : unsigned char {
+  ok,              ///< manipulating, every finger in contact
+  grasping,        ///< grasp phase running
+  grasped,         ///< grasp complete: every finger presses with the nominal force
+  contact_lost,    ///< manipulating, at least one finger is reacquiring its contact
+  idle,            ///< configured, no task started: zero output
+  not_configured,  ///< configure() has not succeeded: zero output
+  invalid_input,   ///< see ControllerOutput::fault; zero output, state frozen
+};
+inline const char* to_string(ControllerStatus s) noexcept {
+  switch (s) {
+    case ControllerStatus::ok: return "ok";
+    case ControllerStatus::grasping: return "grasping";
+    case ControllerStatus::grasped: return "grasped";
+    case ControllerStatus::contact_lost: return "contact_lost";
+    case ControllerStatus::idle: return "idle";
+    case ControllerStatus::not_configured: return "not_configured";
+    case ControllerStatus::invalid_input: return "invalid_input";
+  }
+  return "unknown";
+}
+
+/// Which input field was rejected.
+enum class InputField : unsigned char {
+  none,
+  time,
+  object_pose,
+  joint_positions,
+  contact_point,
+  contact_normal,
+  normal_force,
+  jacobian,
+  virtual_contact_point,
+};
+inline const char* to_string(InputField f) noexcept {
+  switch (f) {
+    case InputField::none: return "none";
+    case InputField::time: return "time";
+    case InputField::object_pose: return "object_pose";
+    case InputField::joint_positions: return "joint_positions";
+    case InputField::contact_point: return "contact_point";
+    case InputField::contact_normal: return "contact_normal";
+    case InputField::normal_force: return "normal_force";
+    case InputField::jacobian: return "jacobian";
+    case InputField::virtual_contact_point: return "virtual_contact_point";
+  }
+  return "unknown";
+}
+
+struct InputFault {
+  InputField field = InputField::none;
+  int finger = -1;  ///< -1 for hand-level fields (time, object pose)
+};
+
+/// Warnings raised during a valid tick (bit flags, never silent saturation).
+enum class ControllerWarning : unsigned {
+  none = 0,
+  ik_damped = 1u << 0,        ///< some finger's IK was damped near a singularity
+  joint_velocity_limited = 1u << 1,  ///< some finger's joint velocities were scaled down
+  servo_saturated = 1u << 2,  ///< some servo PI hit its integral/output limit
+  force_limited = 1u << 3,    ///< the planner limited a balancing force
+  twist_limited = 1u << 4,    ///< the commanded object twist was scaled to its limit
+  long_tick = 1u << 5,        ///< dt exceeded max_tick: integration used max_tick
+  no_balancing_contact = 1u << 6,  ///< no balancing finger touching: forces unbalanced
+};
+constexpr ControllerWarning operator|(ControllerWarning a, ControllerWarning b) noexcept {
+  return static_cast<ControllerWarning>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
+}
+constexpr bool has(ControllerWarning s, ControllerWarning flag) noexcept {
+  return (static_cast<unsigned>(s) & static_cast<unsigned>(flag)) != 0u;
+}
+
+template <typename Scalar>
+struct PoseFeedback {
+  Scalar position_gain = Scalar(8);     ///< 1/s
+  Scalar orientation_gain = Scalar(8);  ///< 1/s
+  Scalar max_linear_speed = Scalar(0.05);   ///< m/s, bound on the commanded linear velocity
+  Scalar max_angular_speed = Scalar(1.0);   ///< rad/s
+  Validation validate() const noexcept {
+    if (!is_finite(position_gain) || position_gain < Scalar(0))
+      return Validation::invalid("pose_feedback.position_gain", "must be finite and >= 0");
+    if (!is_finite(orientation_gain) || orientation_gain < Scalar(0))
+      return Validation::invalid("pose_feedback.orientation_gain", "must be finite and >= 0");
+    if (!(max_linear_speed > Scalar(0)))
+      return Validation::invalid("pose_feedback.max_linear_speed", "must be > 0");
+    if (!(max_angular_speed > Scalar(0)))
+      return Validation::invalid("pose_feedback.max_angular_speed", "must be > 0");
+    return Validation::valid();
+  }
+};
+
+namespace detail {
+template <typename T, int N>
+using FingerArray = std::conditional_t<N == Dynamic, std::vector<T>, std::array<T, (N > 0 ? N : 1)>>;
+}  // namespace detail
+
+/// Controller for NumFingers fingers of Dim-dimensional space; finger DOF as in
+/// FingerChain (exact Dof, or Dynamic with MaxDof capacity). NumFingers may be Dynamic
+/// (sized by configure(), which then allocates once).
+template <typename Scalar_, int Dim_, int NumFingers_, int Dof_, int MaxDof_ = Dof_>
+class ReactiveController {
+ public:
+  using Scalar = Scalar_;
+  static constexpr int Dim = Dim_;
+  static constexpr int NumFingers = NumFingers_;
+  using Chain = FingerChain<Scalar, Dim, Dof_, MaxDof_>;
+  using JointVector = typename Chain::JointVector;
+  using Jacobian = typename Chain::Jacobian;
+  using Vec = Vector<Scalar, Dim>;
+  using TwistT = Twist<Scalar, Dim>;
+  using PoseT = Pose<Scalar, Dim>;
+  using Trajectory = ObjectTrajectory<Scalar, Dim>;
+  using Planner = ForcePlanner<Scalar, Dim, NumFingers>;
+
+  /// Where a finger's contact Jacobian comes from.
+  enum class KinematicsSource : unsigned char {
+    chain,     ///< computed from FingerConfig::chain (forward kinematics + point Jacobian)
+    external,  ///< supplied each tick in FingerInput::jacobian by the user's kinematics
+  };
+
+  struct FingerConfig {
+    /// The finger's kinematics. With KinematicsSource::external only the joint count
+    /// and the joints' max_velocity are used.
+    Chain chain{};
+    KinematicsSource kinematics = KinematicsSource::chain;
+    FingerRole role = FingerRole::preset;  ///< force-planner role (the thumb: balancing)
+  };
+
+  struct Config {
+    detail::FingerArray<FingerConfig, NumFingers> fingers{};
+    Scalar control_period = Scalar(1e-3);  ///< s, nominal tick (used for the first tick)
+    Scalar max_tick = Scalar(0.01);        ///< s, longest dt integrated in one tick
+    PoseFeedback<Scalar> pose_feedback{};
+    ServoGains<Scalar> servo{};
+    IkParams<Scalar> ik{};
+    ForcePlannerParams<Scalar> force_planner{};
+    GraspParams<Scalar> grasp{};
+  };
+
+  /// Tactile contact of one finger (world frame).
+  struct TactileContact {
+    bool touching = false;
+    Vec contact_point = Vec::Zero();  ///< m
+    Vec normal = Vec::UnitX();        ///< object's outward unit normal
+    Scalar normal_force = Scalar(0);  ///< N, >= 0
+  };
+
+  struct FingerInput {
+    JointVector joint_positions{};  ///< rad, size = the finger's DOF
+    TactileContact contact{};
+    /// KinematicsSource::external only: the Dim x DOF Jacobian of the contact point
+    /// (when touching) or of the virtual contact point (when not), and that virtual
+    /// contact point (fingertip surface point facing the object, world frame).
+    Jacobian jacobian{};
+    Vec virtual_contact_point = Vec::Zero();
+  };
+
+  struct Input {
+    Scalar time = Scalar(0);  ///< s, strictly increasing
+    PoseT object_pose{};      ///< measured object pose
+    detail::FingerArray<FingerInput, NumFingers> fingers{};
+  };
+
+  struct FingerOutput {
+    JointVector joint_velocities{};  ///< rad/s, the command
+    FingerState state = FingerState::idle;
+    Vec desired_contact_velocity = Vec::Zero();  ///< eq. 2 (or the approach velocity)
+    Scalar desired_normal_force = Scalar(0);     ///< N (0 when no force is servoed)
+    ServoCommand<Scalar, Dim> servo{};           ///< motion / force parts and their sum
+    ServoStatus servo_status = ServoStatus::ok;
+    IkReport<Scalar> ik{};
+  };
+
+  struct Output {
+    detail::FingerArray<FingerOutput, NumFingers> fingers{};
+    PoseT desired_object_pose{};
+    TwistT feedforward_twist = TwistT::Zero();
+    TwistT commanded_twist = TwistT::Zero();  ///< feed-forward + feedback, after limits
+    TwistT pose_error = TwistT::Zero();       ///< pose_error(desired, measured)
+    Vec force_residual = Vec::Zero();          ///< sum f_i n_i of the plan, N
+    ForcePlanStatus force_plan_status = ForcePlanStatus::ok;
+    ControllerWarning warnings = ControllerWarning::none;
+    InputFault fault{};
+    Scalar manipulation_time = Scalar(0);  ///< s since start_manipulation
+    int segment = -1;                      ///< active trajectory segment
+  };
+
+  /// Controller phase (see the file comment).
+  enum class Phase : unsigned char { idle, grasping, grasped, manipulating };
+
+  ReactiveController() = default;
+
+  /// Checks a configuration without applying it; names the first invalid field.
+  static Validation validate(const Config& c) noexcept {
+    const int n = static_cast<int>(c.fingers.size());
+    if (n < 1) return Validation::invalid("fingers", "at least one finger");
+    if (!is_finite(c.control_period) || !(c.control_period > Scalar(0)))
+      return Validation::invalid("control_period", "must be finite and > 0");
+    if (!is_finite(c.max_tick) || !(c.max_tick >= c.control_period))
+      return Validation::invalid("max_tick", "must be finite and >= control_period");
+    Validation v = c.pose_feedback.validate();
+    if (!v.ok()) return v;
+    if (!(v = c.servo.validate()).ok()) return v;
+    if (!(v = c.ik.validate()).ok()) return Validation::invalid("ik.damping", v.reason);
+    if (!(v = c.force_planner.validate()).ok()) return v;
+    if (!(v = c.grasp.validate()).ok()) return v;
+    bool any_balancing = false;
+    for (int i = 0; i < n; ++i) {
+      const FingerConfig& f = c.fingers[static_cast<std::size_t>(i)];
+      if (!(v = f.chain.validate()).ok()) return v.for_finger(i);
+      any_balancing = any_balancing || f.role == FingerRole::balancing;
+    }
+    if (n > 1 && !any_balancing)
+      return Validation::invalid("fingers.role", "at least one finger must be balancing");
+    return Validation::valid();
+  }
+
+  /// Validates and applies a configuration (all or nothing). Allocates only for
+  /// run-time sized hands or chains. Leaves the controller idle.
+  Validation configure(const Config& c) {
+    const Validation v = validate(c);
+    if (!v.ok()) return v;
+    config_ = c;
+    const int n = finger_count();
+    if constexpr (NumFingers == Dynamic) slots_.resize(static_cast<std::size_t>(n));
+    planner_.resize(n);
+    planner_.set_params(c.force_planner);
+    for (int i = 0; i < n; ++i) {
+      const FingerConfig& fc = config_.fingers[static_cast<std::size_t>(i)];
+      Slot& s = slots_[static_cast<std::size_t>(i)];
+      const int dof = fc.chain.dof();
+      s.kinematics.joint_origins.setZero(Dim, dof);
+      s.kinematics.joint_axes.setZero(3, dof);
+      s.ik.set_dof(dof);
+      s.ik.set_params(c.ik);
+      s.servo.set_gains(c.servo);
+      s.jacobian.setZero(Dim, dof);
+      s.qdot.setZero(dof);
+      s.max_velocity = fc.chain.velocity_limits();
+      planner_.set_role(i, fc.role);
+    }
+    touching_ = Planner::Mask::Zero(n);
+    normals_ = Planner::Normals::Zero(Dim, n);
+    desired_forces_ = Planner::ForceVector::Zero(n);
+    configured_ = true;
+    reset();
+    return Validation::valid();
+  }
+
+  /// Back to idle: integrators, filters, grasp and trajectory progress cleared.
+  void reset() noexcept {
+    phase_ = Phase::idle;
+    has_time_ = false;
+    settled_time_ = Scalar(0);
+    manipulation_time_ = Scalar(0);
+    planner_.reset();
+    for (Slot& s : slots_) {
+      s.servo.reset();
+      s.state = FingerState::idle;
+      s.had_contact = false;
+    }
+  }
+
+  int finger_count() const noexcept { return static_cast<int>(config_.fingers.size()); }
+  const Config& config() const noexcept { return config_; }
+  Phase phase() const noexcept { return phase_; }
+
+  /// An Input / Output sized for the configured hand (allocates only for run-time
+  /// finger counts); call once, outside the control loop.
+  Input make_input() const {
+    Input in;
+    if constexpr (NumFingers == Dynamic) in.fingers.resize(config_.fingers.size());
+    for (int i = 0; i < finger_count(); ++i) {
+      const int dof = config_.fingers[static_cast<std::size_t>(i)].chain.dof();
+      in.fingers[static_cast<std::size_t>(i)].joint_positions = JointVector::Zero(dof);
+      in.fingers[static_cast<std::size_t>(i)].jacobian = Jacobian::Zero(Dim, dof);
+    }
+    return in;
+  }
+  Output make_output() const {
+    Output out;
+    if constexpr (NumFingers == Dynamic) out.fingers.resize(config_.fingers.size());
+    for (int i = 0; i < finger_count(); ++i)
+      out.fingers[static_cast<std::size_t>(i)].joint_velocities =
+          JointVector::Zero(config_.fingers[static_cast<std::size_t>(i)].chain.dof());
+    return out;
+  }
+  bool configured() const noexcept { return configured_; }
+
+  /// Starts the grasp phase towards one target per finger (see grasp.hpp).
+  Validation start_grasp(const detail::FingerArray<GraspTarget<Scalar, Dim>, NumFingers>& targets) noexcept {
+    if (!configured_) return Validation::invalid("controller", "not configured");
+    if (static_cast<int>(targets.size()) != finger_count())
+      return Validation::invalid("targets", "one target per finger");
+    for (int i = 0; i < finger_count(); ++i) {
+      const Validation v = targets[static_cast<std::size_t>(i)].validate();
+      if (!v.ok()) return v.for_finger(i);
+    }
+    for (int i = 0; i < finger_count(); ++i) {
+      Slot& s = slots_[static_cast<std::size_t>(i)];
+      s.target = targets[static_cast<std::size_t>(i)];
+      s.target.normal.normalize();
+      s.state = FingerState::approaching;
+      s.servo.reset();
+    }
+    settled_time_ = Scalar(0);
+    phase_ = Phase::grasping;
+    return Validation::valid();
+  }
+
+  /// Starts tracking `trajectory` (its start pose is normally the measured pose at
+  /// release). Allowed once the grasp has completed, or while already manipulating.
+  Validation start_manipulation(const Trajectory& trajectory) noexcept {
+    if (!configured_) return Validation::invalid("controller", "not configured");
+    if (phase_ != Phase::grasped && phase_ != Phase::manipulating)
+      return Validation::invalid("phase", "the grasp has not completed");
+    trajectory_ = trajectory;
+    manipulation_time_ = Scalar(0);
+    phase_ = Phase::manipulating;
+    for (Slot& s : slots_)
+      if (s.state == FingerState::pressing) s.state = FingerState::in_contact;
+    return Validation::valid();
+  }
+
+  /// One control tick. See the file comment for the contract.
+  ControllerStatus update(const Input& in, Output& out) noexcept {
+    out.warnings = ControllerWarning::none;
+    out.fault = InputFault{};
+    const int n = finger_count();
+    if (!configured_) {
+      zero_output(out);
+      return ControllerStatus::not_configured;
+    }
+    if (static_cast<int>(in.fingers.size()) != n || static_cast<int>(out.fingers.size()) != n) {
+      // Only possible for run-time finger counts; nothing sensible to command.
+      out.fault = InputFault{InputField::joint_positions, -1};
+      return ControllerStatus::invalid_input;
+    }
+    const InputFault fault = check_input(in);
+    if (fault.field != InputField::none) {
+      zero_output(out);
+      out.fault = fault;
+      return ControllerStatus::invalid_input;
+    }
+    Scalar dt = has_time_ ? in.time - last_time_ : config_.control_period;
+    if (dt > config_.max_tick) {
+      dt = config_.max_tick;
+      out.warnings = out.warnings | ControllerWarning::long_tick;
+    }
+    last_time_ = in.time;
+    has_time_ = true;
+
+    if (phase_ == Phase::idle) {
+      zero_output(out);
+      return ControllerStatus::idle;
+    }
+    if (phase_ == Phase::manipulating) return manipulate(in, dt, out);
+    return grasp(in, dt, out);
+  }
+
+  /// Tick-to-tick bound on the change of a finger's joint-velocity command is not
+  /// imposed here; the servo PIs low-pass the command (paper, section IV-B).
+  const Trajectory& trajectory() const noexcept { return trajectory_; }
+
+ private:
+
+  struct Slot {
+    FingerKinematics<Chain> kinematics{};
+    ContactIk<Scalar, Dim, Dof_, MaxDof_> ik{};
+    HybridServo<Scalar, Dim> servo{};
+    Jacobian jacobian{};
+    JointVector qdot{};
+    JointVector max_velocity{};
+    GraspTarget<Scalar, Dim> target{};
+    FingerState state = FingerState::idle;
+    bool had_contact = false;
+    Vec last_contact_object = Vec::Zero();  ///< last contact point, object frame
+    Vec last_normal_object = Vec::UnitX();  ///< last outward normal, object frame
+  };
+
+  InputFault check_input(const Input& in) const noexcept {
+    if (!is_finite(in.time) || (has_time_ && !(in.time > last_time_))) return {InputField::time, -1};
+    if (!in.object_pose.is_finite()) return {InputField::object_pose, -1};
+    const Rotation<Scalar, Dim> RtR = in.object_pose.rotation.transpose() * in.object_pose.rotation;
+    if (!((RtR - Rotation<Scalar, Dim>::Identity()).cwiseAbs().maxCoeff() < Scalar(1e-3)))
+      return {InputField::object_pose, -1};
+    for (int i = 0; i < finger_count(); ++i) {
+      const FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
+      const FingerConfig& fc = config_.fingers[static_cast<std::size_t>(i)];
+      if (f.joint_positions.size() != fc.chain.dof() || !all_finite(f.joint_positions))
+        return {InputField::joint_positions, i};
+      if (f.contact.touching) {
+        if (!all_finite(f.contact.contact_point)) return {InputField::contact_point, i};
+        const Scalar nn = f.contact.normal.norm();
+        if (!all_finite(f.contact.normal) || !(nn > Scalar(0.5) && nn < Scalar(1.5)))
+          return {InputField::contact_normal, i};
+        if (!is_finite(f.contact.normal_force) || f.contact.normal_force < Scalar(0))
+          return {InputField::normal_force, i};
+      }
+      if (fc.kinematics == KinematicsSource::external) {
+        if (f.jacobian.cols() != fc.chain.dof() || !all_finite(f.jacobian)) return {InputField::jacobian, i};
+        if (!f.contact.touching && !all_finite(f.virtual_contact_point))
+          return {InputField::virtual_contact_point, i};
+      }
+    }
+    return {};
+  }
+
+  void zero_output(Output& out) const noexcept {
+    for (int i = 0; i < static_cast<int>(out.fingers.size()); ++i) {
+      FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
+      const int dof = i < finger_count() ? config_.fingers[static_cast<std::size_t>(i)].chain.dof()
+                                         : static_cast<int>(fo.joint_velocities.size());
+      fo.joint_velocities.setZero(dof);
+      fo.desired_contact_velocity.setZero();
+      fo.desired_normal_force = Scalar(0);
+      fo.servo = ServoCommand<Scalar, Dim>{};
+      fo.ik = IkReport<Scalar>{};
+      fo.servo_status = ServoStatus::ok;
+      if (i < finger_count()) fo.state = slots_[static_cast<std::size_t>(i)].state;
+    }
+    out.commanded_twist.setZero();
+    out.feedforward_twist.setZero();
+  }
+
+  /// Kinematics for one finger at the point `p` (contact or virtual contact point).
+  void finger_jacobian(int i, const FingerInput& f, const Vec& p) noexcept {
+    Slot& s = slots_[static_cast<std::size_t>(i)];
+    if (config_.fingers[static_cast<std::size_t>(i)].kinematics == KinematicsSource::external) {
+      s.jacobian = f.jacobian;
+    } else {
+      point_jacobian(s.kinematics, p, s.jacobian);
+    }
+  }
+
+  /// Virtual contact point facing an object whose outward normal there is n.
+  Vec virtual_point(int i, const FingerInput& f, const Vec& n) const noexcept {
+    const FingerConfig& fc = config_.fingers[static_cast<std::size_t>(i)];
+    if (fc.kinematics == KinematicsSource::external) return f.virtual_contact_point;
+    return fingertip_surface_point(fc.chain, slots_[static_cast<std::size_t>(i)].kinematics, n);
+  }
+
+  /// Servo + IK for one finger; fills its output.
+  void servo_and_ik(int i, const Vec& v_desired, Scalar f_desired, const FingerInput& f,
+                    bool force_active, Scalar dt, FingerOutput& fo, ControllerWarning& w) noexcept {
+    Slot& s = slots_[static_cast<std::size_t>(i)];
+    fo.desired_contact_velocity = v_desired;
+    fo.desired_normal_force = force_active ? f_desired : Scalar(0);
+    fo.servo_status = s.servo.update(v_desired, f_desired, f.contact.normal_force, f.contact.normal,
+                                     force_active, dt, fo.servo);
+    if (fo.servo_status != ServoStatus::ok) w = w | ControllerWarning::servo_saturated;
+    fo.ik = s.ik.solve(s.jacobian, fo.servo.total, s.max_velocity, fo.joint_velocities);
+    if (has(fo.ik.status, IkStatus::damped)) w = w | ControllerWarning::ik_damped;
+    if (has(fo.ik.status, IkStatus::limited)) w = w | ControllerWarning::joint_velocity_limited;
+    fo.state = s.state;
+  }
+
+  void update_kinematics(const Input& in) noexcept {
+    for (int i = 0; i < finger_count(); ++i) {
+      const FingerConfig& fc = config_.fingers[static_cast<std::size_t>(i)];
+      if (fc.kinematics == KinematicsSource::chain)
+        forward_kinematics(fc.chain, in.fingers[static_cast<std::size_t>(i)].joint_positions,
+                           slots_[static_cast<std::size_t>(i)].kinematics);
+    }
+  }
+
+  void remember_contact(Slot& s, const TactileContact& c, const PoseT& object) noexcept {
+    s.had_contact = true;
+    s.last_contact_object = object.rotation.transpose() * (c.contact_point - object.position);
+    s.last_normal_object = object.rotation.transpose() * c.normal;
+  }
+
+  ControllerStatus grasp(const Input& in, Scalar dt, Output& out) noexcept {
+    update_kinematics(in);
+    ControllerWarning w = out.warnings;
+    const GraspParams<Scalar>& g = config_.grasp;
+    const Scalar f0 = config_.force_planner.nominal_force;
+    bool all_pressing = true;
+    for (int i = 0; i < finger_count(); ++i) {
+      Slot& s = slots_[static_cast<std::size_t>(i)];
+      const FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
+      FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
+      if (f.contact.touching) {
+        if (s.state == FingerState::approaching) s.servo.reset_force();
+        s.state = FingerState::pressing;
+        remember_contact(s, f.contact, in.object_pose);
+        // Tangential pull of the recorded contact point towards the target.
+        const Vec d = s.target.contact_point - f.contact.contact_point;
+        const Vec v = g.tangential_gain * (d - d.dot(f.contact.normal) * f.contact.normal);
+        finger_jacobian(i, f, f.contact.contact_point);
+        servo_and_ik(i, v, f0, f, true, dt, fo, w);
+        all_pressing = all_pressing &&
+                       std::abs(f.contact.normal_force - f0) <= g.force_tolerance * f0;
+      } else {
+        if (s.state == FingerState::pressing) s.servo.reset_force();
+        s.state = FingerState::approaching;
+        const Vec p_v = virtual_point(i, f, s.target.normal);
+        const Vec v = approach_velocity(g, p_v, s.target.contact_point, s.target.normal);
+        finger_jacobian(i, f, p_v);
+        servo_and_ik(i, v, Scalar(0), f, false, dt, fo, w);
+        all_pressing = false;
+      }
+    }
+    out.warnings = w;
+    out.desired_object_pose = in.object_pose;
+    out.commanded_twist.setZero();
+    out.feedforward_twist.setZero();
+    out.pose_error.setZero();
+    settled_time_ = all_pressing ? settled_time_ + dt : Scalar(0);
+    if (settled_time_ >= g.settle_time) phase_ = Phase::grasped;
+    return phase_ == Phase::grasped ? ControllerStatus::grasped : ControllerStatus::grasping;
+  }
+
+  ControllerStatus manipulate(const Input& in, Scalar dt, Output& out) noexcept {
+    update_kinematics(in);
+    ControllerWarning w = out.warnings;
+    manipulation_time_ += dt;
+    // Layer 1: desired pose and commanded twist (feed-forward + feedback, method.md s.3).
+    const TrajectorySample<Scalar, Dim> sample = trajectory_.evaluate(manipulation_time_);
+    out.desired_object_pose = sample.pose;
+    out.feedforward_twist = sample.twist;
+    out.segment = sample.segment;
+    out.manipulation_time = manipulation_time_;
+    out.pose_error = pose_error(sample.pose, in.object_pose);
+    constexpr int R = SpatialDim<Dim>::kRot;
+    TwistT V = sample.twist;
+    V.template head<Dim>() += config_.pose_feedback.position_gain * out.pose_error.template head<Dim>();
+    V.template tail<R>() += config_.pose_feedback.orientation_gain * out.pose_error.template tail<R>();
+    const Scalar lin = V.template head<Dim>().norm(), ang = V.template tail<R>().norm();
+    Scalar scale = Scalar(1);
+    if (lin > config_.pose_feedback.max_linear_speed) scale = config_.pose_feedback.max_linear_speed / lin;
+    if (ang > config_.pose_feedback.max_angular_speed)
+      scale = std::min(scale, config_.pose_feedback.max_angular_speed / ang);
+    if (scale < Scalar(1)) {
+      V *= scale;  // scale the whole twist: the screw axis is kept
+      w = w | ControllerWarning::twist_limited;
+    }
+    out.commanded_twist = V;
+
+    // Layer 2: forces for the touching fingers.
+    for (int i = 0; i < finger_count(); ++i) {
+      const FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
+      touching_(i) = f.contact.touching ? 1 : 0;
+      if (f.contact.touching) normals_.col(i) = f.contact.normal;
+    }
+    out.force_plan_status = planner_.plan(touching_, normals_, dt, desired_forces_, out.force_residual);
+    if (has(out.force_plan_status, ForcePlanStatus::limited)) w = w | ControllerWarning::force_limited;
+    if (has(out.force_plan_status, ForcePlanStatus::no_balancing_contact))
+      w = w | ControllerWarning::no_balancing_contact;
+
+    // Layers 2-3 per finger.
+    bool lost = false;
+    for (int i = 0; i < finger_count(); ++i) {
+      Slot& s = slots_[static_cast<std::size_t>(i)];
+      const FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
+      FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
+      if (f.contact.touching) {
+        if (s.state == FingerState::reacquiring) s.servo.reset_force();
+        s.state = FingerState::in_contact;
+        remember_contact(s, f.contact, in.object_pose);
+        const Vec v = contact_point_velocity<Scalar, Dim>(V, f.contact.contact_point, in.object_pose.position);
+        finger_jacobian(i, f, f.contact.contact_point);
+        servo_and_ik(i, v, desired_forces_(i), f, true, dt, fo, w);
+      } else {
+        lost = true;
+        if (s.state != FingerState::reacquiring) s.servo.reset_force();
+        s.state = FingerState::reacquiring;
+        // Aim at the last contact point carried with the measured object, along the
+        // last normal; add the object's motion there (eq. 2) so the finger keeps up.
+        const Vec n = in.object_pose.rotation * s.last_normal_object;
+        const Vec p_t = in.object_pose.transform_point(s.last_contact_object);
+        const Vec p_v = virtual_point(i, f, n);
+        const Vec v = approach_velocity(config_.grasp, p_v, p_t, n) +
+                      contact_point_velocity<Scalar, Dim>(V, p_t, in.object_pose.position);
+        finger_jacobian(i, f, p_v);
+        servo_and_ik(i, v, Scalar(0), f, false, dt, fo, w);
+      }
+    }
+    out.warnings = w;
+    return lost ? ControllerStatus::contact_lost : ControllerStatus::ok;
+  }
+
+  Config config_{};
+  bool configured_ = false;
+  Phase phase_ = Phase::idle;
+  detail::FingerArray<Slot, NumFingers> slots_{};
+  Planner planner_{};
+  typename Planner::Mask touching_{};
+  typename Planner::Normals normals_{};
+  typename Planner::ForceVector desired_forces_{};
+  Trajectory trajectory_{};
+  Scalar last_time_ = Scalar(0);
+  bool has_time_ = false;
+  Scalar settled_time_ = Scalar(0);
+  Scalar manipulation_time_ = Scalar(0);
+};
+
+}  // namespace inhand
