@@ -7,9 +7,15 @@
 // creeping along -n_t at `creep_speed` after reaching p_t until tactile sensing reports
 // contact. On contact the actual contact point is recorded and the finger presses with
 // the nominal force (force servo along the measured normal) while its contact point is
-// drawn tangentially towards p_t with `tangential_gain`. The grasp is complete once
-// every finger touches with |f - f_nominal| <= force_tolerance * f_nominal for
-// `settle_time` seconds.
+// drawn tangentially towards p_t with `tangential_gain`; in addition the fingertip
+// slides along the tangential part of n_t at up to `alignment_speed`, which on a convex
+// object turns the measured normal n towards the expected one (a target on the
+// object's axis is otherwise ambiguous: p_t - p_c is then parallel to n). The grasp is
+// complete once every finger touches with |f - f_nominal| <= force_tolerance *
+// f_nominal, its contact point lies within `position_tolerance` of p_t in the tangent
+// plane and the angle between n and n_t is below `alignment_tolerance`, for
+// `settle_time` seconds (the paper: "the predefined desired contact points and the
+// desired force are approached").
 // During manipulation a finger that loses contact re-approaches along its last
 // measured normal, aiming at its last contact point carried rigidly with the measured
 // object pose, and is reported as `reacquiring` until it touches again.
@@ -45,8 +51,11 @@ struct GraspParams {
   Scalar approach_gain = Scalar(4);       ///< 1/s, proportional gain towards the target
   Scalar approach_speed = Scalar(0.03);   ///< m/s, cap on the approach velocity
   Scalar creep_speed = Scalar(0.005);     ///< m/s along -n until contact is sensed
-  Scalar tangential_gain = Scalar(1);     ///< 1/s, pressing: tangential pull to the target
+  Scalar tangential_gain = Scalar(5);     ///< 1/s, pressing: tangential pull to the target
   Scalar force_tolerance = Scalar(0.1);   ///< relative, grasp-complete criterion
+  Scalar position_tolerance = Scalar(1e-3);  ///< m, tangential, grasp-complete criterion
+  Scalar alignment_speed = Scalar(0.1);      ///< m/s, pressing: normal alignment speed
+  Scalar alignment_tolerance = Scalar(0.05); ///< rad, grasp-complete criterion
   Scalar settle_time = Scalar(0.1);       ///< s the criterion must hold
 
   Validation validate() const noexcept {
@@ -58,6 +67,12 @@ struct GraspParams {
       return Validation::invalid("grasp.creep_speed", "must be finite, > 0 and <= approach_speed");
     if (!is_finite(tangential_gain) || !(tangential_gain >= Scalar(0)))
       return Validation::invalid("grasp.tangential_gain", "must be finite and >= 0");
+    if (!is_finite(alignment_speed) || !(alignment_speed >= Scalar(0)))
+      return Validation::invalid("grasp.alignment_speed", "must be finite and >= 0");
+    if (!is_finite(alignment_tolerance) || !(alignment_tolerance > Scalar(0)))
+      return Validation::invalid("grasp.alignment_tolerance", "must be finite and > 0");
+    if (!is_finite(position_tolerance) || !(position_tolerance > Scalar(0)))
+      return Validation::invalid("grasp.position_tolerance", "must be finite and > 0");
     if (!is_finite(force_tolerance) || !(force_tolerance > Scalar(0)))
       return Validation::invalid("grasp.force_tolerance", "must be finite and > 0");
     if (!is_finite(settle_time) || !(settle_time >= Scalar(0)))
@@ -81,12 +96,20 @@ struct GraspTarget {
 };
 
 /// Approach velocity of a virtual contact point p_v towards target p_t with the
-/// expected outward normal n: saturated P term plus creep along -n.
+/// expected outward normal n: saturated P term plus creep along -n. Once p_v is past
+/// p_t (on the -n side) the P term keeps only its tangential part, so the finger
+/// goes on creeping inwards at creep_speed until contact is sensed.
 template <typename Scalar, int Dim>
 inline Vector<Scalar, Dim> approach_velocity(const GraspParams<Scalar>& g, const Vector<Scalar, Dim>& p_v,
                                              const Vector<Scalar, Dim>& p_t,
                                              const Vector<Scalar, Dim>& n) noexcept {
-  Vector<Scalar, Dim> v = g.approach_gain * (p_t - p_v);
+  Vector<Scalar, Dim> e = p_t - p_v;
+  // Without this the outward pull of the P term would cancel the creep at
+  // creep_speed / approach_gain behind p_t, and a finger whose object surface lies
+  // deeper than expected would stall there, never touching.
+  const Scalar en = e.dot(n), nn = n.squaredNorm();
+  if (en > Scalar(0) && nn > Scalar(0)) e -= (en / nn) * n;
+  Vector<Scalar, Dim> v = g.approach_gain * e;
   const Scalar speed = v.norm();
   if (speed > g.approach_speed) v *= g.approach_speed / speed;
   return v - g.creep_speed * n;

@@ -3,8 +3,9 @@
 //
 //   layer 1  trajectory : desired object pose X_d(t) (controller/trajectory.hpp) and
 //                         the commanded object twist
-//                           V = V_ff + diag(k_p I, k_r I) * pose_error(X_d, X_measured)
-//                         (feed-forward plus feedback on the MEASURED pose, method.md s.3)
+//                           V = V_ff + K_p e + K_i integral(e),  e = pose_error(X_d, X_measured)
+//                         (feed-forward plus PI feedback on the MEASURED pose, method.md
+//                         s.3; gains per part, position and orientation)
 //   layer 2  per finger : desired contact-point velocity v_i = v + w x (p_ci - p_o)
 //                         (eq. 2 at the MEASURED contact point p_ci) and the desired
 //                         normal force f_i from the force planner (section 5)
@@ -122,7 +123,22 @@ struct PoseFeedback {
   Scalar orientation_gain = Scalar(8);  ///< 1/s
   Scalar max_linear_speed = Scalar(0.05);   ///< m/s, bound on the commanded linear velocity
   Scalar max_angular_speed = Scalar(1.0);   ///< rad/s
+  /// Integral action on the pose error (1/s^2): removes the steady offset left where
+  /// the force servos' integrators balance the proportional pose feedback.
+  Scalar position_integral_gain = Scalar(10);
+  Scalar orientation_integral_gain = Scalar(10);
+  /// Bounds on the integrated pose error (m s and rad s), anti-windup.
+  Scalar position_integral_limit = Scalar(2e-3);
+  Scalar orientation_integral_limit = Scalar(2e-2);
   Validation validate() const noexcept {
+    if (!is_finite(position_integral_gain) || position_integral_gain < Scalar(0))
+      return Validation::invalid("pose_feedback.position_integral_gain", "must be finite and >= 0");
+    if (!is_finite(orientation_integral_gain) || orientation_integral_gain < Scalar(0))
+      return Validation::invalid("pose_feedback.orientation_integral_gain", "must be finite and >= 0");
+    if (!(position_integral_limit > Scalar(0)))
+      return Validation::invalid("pose_feedback.position_integral_limit", "must be > 0");
+    if (!(orientation_integral_limit > Scalar(0)))
+      return Validation::invalid("pose_feedback.orientation_integral_limit", "must be > 0");
     if (!is_finite(position_gain) || position_gain < Scalar(0))
       return Validation::invalid("pose_feedback.position_gain", "must be finite and >= 0");
     if (!is_finite(orientation_gain) || orientation_gain < Scalar(0))
@@ -299,6 +315,7 @@ class ReactiveController {
     has_time_ = false;
     settled_time_ = Scalar(0);
     manipulation_time_ = Scalar(0);
+    pose_error_integral_.setZero();
     planner_.reset();
     for (Slot& s : slots_) {
       s.servo.reset();
@@ -362,6 +379,7 @@ class ReactiveController {
       return Validation::invalid("phase", "the grasp has not completed");
     trajectory_ = trajectory;
     manipulation_time_ = Scalar(0);
+    if (phase_ != Phase::manipulating) pose_error_integral_.setZero();
     phase_ = Phase::manipulating;
     for (Slot& s : slots_)
       if (s.state == FingerState::pressing) s.state = FingerState::in_contact;
@@ -479,6 +497,14 @@ class ReactiveController {
     }
   }
 
+  /// Fingertip sphere centre (chain kinematics); for external kinematics the user's
+  /// Jacobian is used as given.
+  Vec fingertip_centre(int i, const FingerInput& f) const noexcept {
+    const FingerConfig& fc = config_.fingers[static_cast<std::size_t>(i)];
+    if (fc.kinematics == KinematicsSource::external) return f.contact.contact_point;
+    return slots_[static_cast<std::size_t>(i)].kinematics.fingertip.position;
+  }
+
   /// Virtual contact point facing an object whose outward normal there is n.
   Vec virtual_point(int i, const FingerInput& f, const Vec& n) const noexcept {
     const FingerConfig& fc = config_.fingers[static_cast<std::size_t>(i)];
@@ -532,11 +558,19 @@ class ReactiveController {
         remember_contact(s, f.contact, in.object_pose);
         // Tangential pull of the recorded contact point towards the target.
         const Vec d = s.target.contact_point - f.contact.contact_point;
-        const Vec v = g.tangential_gain * (d - d.dot(f.contact.normal) * f.contact.normal);
-        finger_jacobian(i, f, f.contact.contact_point);
+        const Vec d_tangential = d - d.dot(f.contact.normal) * f.contact.normal;
+        const Scalar cos_angle = f.contact.normal.dot(s.target.normal);
+        const Vec misalignment = s.target.normal - cos_angle * f.contact.normal;  // |.| = sin(angle)
+        const Vec v = g.tangential_gain * d_tangential + g.alignment_speed * misalignment;
+        // Grasp phase: the object is held fixed, so the contact LOCATION follows the
+        // fingertip sphere centre, not the material point at the contact; servo the
+        // centre so that the tangential pull really moves the contact (grasp.hpp).
+        finger_jacobian(i, f, fingertip_centre(i, f));
         servo_and_ik(i, v, f0, f, true, dt, fo, w);
+        const bool aligned = cos_angle > Scalar(0) && misalignment.norm() <= std::sin(g.alignment_tolerance);
         all_pressing = all_pressing &&
-                       std::abs(f.contact.normal_force - f0) <= g.force_tolerance * f0;
+                       std::abs(f.contact.normal_force - f0) <= g.force_tolerance * f0 &&
+                       d_tangential.norm() <= g.position_tolerance && aligned;
       } else {
         if (s.state == FingerState::pressing) s.servo.reset_force();
         s.state = FingerState::approaching;
@@ -569,9 +603,20 @@ class ReactiveController {
     out.manipulation_time = manipulation_time_;
     out.pose_error = pose_error(sample.pose, in.object_pose);
     constexpr int R = SpatialDim<Dim>::kRot;
+    const PoseFeedback<Scalar>& pf = config_.pose_feedback;
+    // Integral of the pose error, each part limited in norm (direction kept).
+    pose_error_integral_ += dt * out.pose_error;
+    const Scalar ip = pose_error_integral_.template head<Dim>().norm();
+    if (ip > pf.position_integral_limit)
+      pose_error_integral_.template head<Dim>() *= pf.position_integral_limit / ip;
+    const Scalar ir = pose_error_integral_.template tail<R>().norm();
+    if (ir > pf.orientation_integral_limit)
+      pose_error_integral_.template tail<R>() *= pf.orientation_integral_limit / ir;
     TwistT V = sample.twist;
-    V.template head<Dim>() += config_.pose_feedback.position_gain * out.pose_error.template head<Dim>();
-    V.template tail<R>() += config_.pose_feedback.orientation_gain * out.pose_error.template tail<R>();
+    V.template head<Dim>() += pf.position_gain * out.pose_error.template head<Dim>() +
+                              pf.position_integral_gain * pose_error_integral_.template head<Dim>();
+    V.template tail<R>() += pf.orientation_gain * out.pose_error.template tail<R>() +
+                            pf.orientation_integral_gain * pose_error_integral_.template tail<R>();
     const Scalar lin = V.template head<Dim>().norm(), ang = V.template tail<R>().norm();
     Scalar scale = Scalar(1);
     if (lin > config_.pose_feedback.max_linear_speed) scale = config_.pose_feedback.max_linear_speed / lin;
@@ -639,6 +684,7 @@ class ReactiveController {
   bool has_time_ = false;
   Scalar settled_time_ = Scalar(0);
   Scalar manipulation_time_ = Scalar(0);
+  TwistT pose_error_integral_ = TwistT::Zero();
 };
 
 }  // namespace inhand

@@ -52,6 +52,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <cstdint>
@@ -433,6 +434,14 @@ class HandPlant {
     momentum_ = world_inertia_times(omega_);
     refresh_contacts();
   }
+  /// Constant external force [N] and torque [N m] on the object (world frame, about the
+  /// centre of mass), held until changed; a disturbance or test load. Not counted in the
+  /// energy accessors (it is work done from outside). Ignored if not finite.
+  void set_external_wrench(const Eigen::Vector3d& force, const Eigen::Vector3d& torque) noexcept {
+    if (!all_finite(force) || !all_finite(torque)) return;
+    external_force_ = force;
+    external_torque_ = torque;
+  }
   /// True object pose (centre of mass frame).
   const Pose<double, 3>& object_pose() const noexcept { return pose_; }
   /// True object twist (v; omega), world frame, v of the centre of mass.
@@ -536,14 +545,52 @@ class HandPlant {
   }
 
  private:
+  /// Per-joint constants for the plant's own forward kinematics: Rodrigues' formula
+  /// R(q) = I + sin(q) K + (1 - cos(q)) K^2 with K = [axis]x precomputed, and the fixed
+  /// parent rotation skipped when it is the identity. Same result as
+  /// inhand::forward_kinematics (to rounding) at a fraction of the cost.
+  struct JointConstants {
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+    bool identity_rotation = true;
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+    Eigen::Matrix3d K = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d K2 = Eigen::Matrix3d::Zero();
+    /// Axis = sign * e_principal exactly (the common case): the rotation then only mixes
+    /// two columns of R. -1 for a general axis.
+    int principal = -1;
+    double sign = 1.0;
+  };
+
   struct Finger {
     explicit Finger(PlantFinger c)
         : chain(std::move(c)),
           ws(chain),
           q(JointVector::Zero(chain.dof())),
           qd(JointVector::Zero(chain.dof())),
-          qd_cmd(JointVector::Zero(chain.dof())) {}
+          qd_cmd(JointVector::Zero(chain.dof())) {
+      for (int j = 0; j < chain.dof(); ++j) {
+        const auto& jd = chain.joints[j];
+        JointConstants& jc = constants[static_cast<std::size_t>(j)];
+        jc.offset = jd.parent_to_joint.position;
+        jc.rotation = jd.parent_to_joint.rotation;
+        jc.identity_rotation = jc.rotation == Eigen::Matrix3d::Identity();
+        jc.axis = jd.axis;
+        jc.K = hat<double>(jd.axis);
+        jc.K2 = jc.K * jc.K;
+        for (int k = 0; k < 3; ++k) {
+          const double a = jd.axis(k);
+          if ((a == 1.0 || a == -1.0) && jd.axis((k + 1) % 3) == 0.0 && jd.axis((k + 2) % 3) == 0.0) {
+            jc.principal = k;
+            jc.sign = a;
+          }
+        }
+      }
+      tip_identity_rotation = chain.joint_to_tip.rotation == Eigen::Matrix3d::Identity();
+    }
     PlantFinger chain;
+    std::array<JointConstants, 6> constants{};
+    bool tip_identity_rotation = true;
     FingerKinematics<PlantFinger> ws;
     JointVector q, qd, qd_cmd;
     Eigen::Vector3d tip_velocity = Eigen::Vector3d::Zero();  // of the sphere centre
@@ -563,7 +610,7 @@ class HandPlant {
   static double effective_mass(const ObjectDef& object) noexcept {
     const Eigen::Vector3d I = object.shape.principal_inertia(object.mass);
     const ObjectShape& s = object.shape;
-    Eigen::Vector3d rho2;  // squared largest distance of the surface from each axis
+    Eigen::Vector3d rho2 = Eigen::Vector3d::Ones();  // squared largest surface distance from each axis
     switch (s.kind) {
       case ObjectShape::Kind::sphere: rho2.setConstant(s.radius * s.radius); break;
       case ObjectShape::Kind::box: {
@@ -589,8 +636,40 @@ class HandPlant {
 
   /// Forward kinematics and the fingertip's rigid-body velocity from q and qd.
   static void update_kinematics(Finger& f) noexcept {
-    forward_kinematics(f.chain, f.q, f.ws);
+    fast_forward_kinematics(f);
     update_tip_velocity(f);
+  }
+  /// Fills f.ws exactly as inhand::forward_kinematics does (see JointConstants).
+  static void fast_forward_kinematics(Finger& f) noexcept {
+    Eigen::Matrix3d R = f.chain.base.rotation;
+    Eigen::Vector3d p = f.chain.base.position;
+    for (int j = 0; j < f.chain.dof(); ++j) {
+      const JointConstants& jc = f.constants[static_cast<std::size_t>(j)];
+      p.noalias() += R * jc.offset;
+      if (!jc.identity_rotation) R = (R * jc.rotation).eval();
+      f.ws.joint_origins.col(j) = p;
+      const double s = std::sin(f.q(j)), c = std::cos(f.q(j));
+      if (jc.principal >= 0) {
+        // R * Rot(sign q, e_k): with (i, l) the cyclic successors of k,
+        // col_i <- c col_i + s' col_l, col_l <- -s' col_i + c col_l, s' = sign sin q.
+        const int k = jc.principal, i = (k + 1) % 3, l = (k + 2) % 3;
+        f.ws.joint_axes.col(j) = jc.sign * R.col(k);
+        const double ss = jc.sign * s;
+        const Eigen::Vector3d ci = R.col(i), cl = R.col(l);
+        R.col(i) = c * ci + ss * cl;
+        R.col(l) = c * cl - ss * ci;
+      } else {
+        f.ws.joint_axes.col(j).noalias() = R * jc.axis;
+        const Eigen::Matrix3d Rj = Eigen::Matrix3d::Identity() + s * jc.K + (1.0 - c) * jc.K2;
+        R = (R * Rj).eval();
+      }
+    }
+    f.ws.fingertip.position.noalias() = p + R * f.chain.joint_to_tip.position;
+    if (f.tip_identity_rotation) {
+      f.ws.fingertip.rotation = R;
+    } else {
+      f.ws.fingertip.rotation.noalias() = R * f.chain.joint_to_tip.rotation;
+    }
   }
   static void update_tip_velocity(Finger& f) noexcept {
     f.tip_velocity.setZero();
@@ -679,8 +758,8 @@ class HandPlant {
     for (auto& f : fingers_) evaluate_contact(f, h);
 
     if (!frozen_) {
-      velocity_ += h * (force_sum_ / object_.mass + params_.gravity);
-      momentum_ += h * torque_sum_;
+      velocity_ += h * ((force_sum_ + external_force_) / object_.mass + params_.gravity);
+      momentum_ += h * (torque_sum_ + external_torque_);
       pose_.position += h * velocity_;
       const Eigen::Matrix3d R0 = pose_.rotation;
       const Eigen::Vector3d w0 = omega_from(R0, momentum_);
@@ -711,7 +790,7 @@ class HandPlant {
         }
         f.qd(j) = qd;
       }
-      if (moved) forward_kinematics(f.chain, f.q, f.ws);
+      if (moved) fast_forward_kinematics(f);
       update_tip_velocity(f);
     }
   }
@@ -730,6 +809,8 @@ class HandPlant {
   Eigen::Vector3d momentum_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d force_sum_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d torque_sum_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d external_force_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d external_torque_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d pose_position_noise_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d pose_rotation_noise_ = Eigen::Vector3d::Zero();
   bool frozen_ = false;

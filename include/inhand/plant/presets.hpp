@@ -18,24 +18,27 @@
 // Shadow-like hand (joint limits after the Shadow hand E series, velocity limits
 // 3 rad/s; link lengths to the next joint, the distal one to the fingertip sphere
 // centre; fingertip sphere radius 10 mm):
-//   finger k in {first, middle, ring} at x_k = +22, 0, -22 mm, base (x_k, 85, 60) mm:
+//   finger k in {first, middle, ring} at x_k = +22, 0, -22 mm, base (x_k, 72.5, 40) mm:
 //     J4 abduction  axis +Y  [-0.35, 0.35]
 //     J3 MCP flex   axis -X  [-0.26, 1.57]   proximal 45 mm
 //     J2 PIP flex   axis -X  [ 0.00, 1.57]   middle   25 mm
 //     J1 DIP flex   axis -X  [ 0.00, 1.57]   distal   26 mm
-//   thumb at x = 0, base (0, -90, 62) mm:
+//   thumb at x = 0, base (0, -92.5, 0) mm (level with the object, reaching up and in):
 //     THJ5 rotation axis +Z  [-1.05, 1.05]
 //     THJ4 flex     axis +X  [-0.20, 1.22]   metacarpal 38 mm
 //     THJ3 sideways axis +Y  [-0.50, 0.50]
 //     THJ2 flex     axis +X  [-0.70, 1.20]   proximal   32 mm
 //     THJ1 flex     axis +X  [-0.26, 1.57]   distal     27 mm
 // Three-finger hand (3 DOF each, velocity limits 3 rad/s, fingertip radius 10 mm):
-//   two fingers at x = +-20 mm, base (x, 88, 48) mm; one opposing finger at x = 0, base
-//   (0, -88, 48) mm; each: abduction axis +Y [-0.5, 0.5], flexion [-0.3, 1.6] with a
+//   two fingers at x = +-20 mm, base (x, 67.5, 45) mm; one opposing finger at x = 0, base
+//   (0, -67.5, 45) mm; each: abduction axis +Y [-0.5, 0.5], flexion [-0.3, 1.6] with a
 //   50 mm proximal link, flexion [0.1, 2.0] with a 40 mm distal link.
-// The bases are placed so that, at each finger's grasp configuration, the fingertip
-// centres sit halfway between the nominal contacts on the two paper objects (the 20 mm
-// radius cylinder and the 20 x 20 x 80 mm box). tests/plant/presets_test.cpp checks
+// The bases come from a 2.5 mm grid search that maximised the worst joint-limit margin
+// and the smallest singular value of the fingertip Jacobian over all the object poses
+// below, for both paper objects (the 20 mm radius cylinder and the 20 x 20 x 80 mm box).
+// The grasp configuration puts each fingertip centre halfway between its nominal
+// contacts on the two objects; the open configuration withdraws it 15 mm along the
+// approach direction and 20 mm down (10-25 mm clear). tests/plant/presets_test.cpp checks
 // numerically that every fingertip reaches its contact on both objects, at the nominal
 // pose and with the object moved +-5 mm along X, Y, Z or turned +-0.2 rad about X, Y, Z,
 // away from the joint limits and from singular configurations.
@@ -110,7 +113,7 @@ inline HandPreset shadow_like_hand() {
   for (int k = 0; k < 3; ++k) {
     PlantFinger f;
     f.joints.resize(4);
-    f.base.position = Eigen::Vector3d(xs[k], 0.085, 0.060);
+    f.base.position = Eigen::Vector3d(xs[k], 0.0725, 0.040);
     f.joints[0] = make_joint(zero, uy, -0.35, 0.35, kVel);
     f.joints[1] = make_joint(zero, -ux, -0.26, 1.57, kVel);
     f.joints[2] = make_joint(Eigen::Vector3d(0, 0, -0.045), -ux, 0.0, 1.57, kVel);
@@ -119,14 +122,14 @@ inline HandPreset shadow_like_hand() {
     f.fingertip_radius = 0.010;
     p.fingers.push_back(f);
     p.finger_names.emplace_back(names[k]);
-    p.open_configuration.push_back(detail::joint_vector({0.0, 0.15, 0.35, 0.30}));
-    p.grasp_configuration.push_back(detail::joint_vector({0.0, 0.35, 0.65, 0.55}));
+    p.open_configuration.push_back(detail::joint_vector({0.0, -0.188, 0.844, 1.071}));
+    p.grasp_configuration.push_back(detail::joint_vector({0.0, 0.102, 1.007, 1.122}));
     p.approach_directions.push_back(uy);
     p.approach_points.push_back(Eigen::Vector3d(xs[k], 0.0, 0.0));
   }
   PlantFinger t;
   t.joints.resize(5);
-  t.base.position = Eigen::Vector3d(0.0, -0.090, 0.062);
+  t.base.position = Eigen::Vector3d(0.0, -0.0925, 0.0);
   t.joints[0] = make_joint(zero, uz, -1.05, 1.05, kVel);
   t.joints[1] = make_joint(zero, ux, -0.20, 1.22, kVel);
   t.joints[2] = make_joint(Eigen::Vector3d(0, 0, -0.038), uy, -0.50, 0.50, kVel);
@@ -136,8 +139,8 @@ inline HandPreset shadow_like_hand() {
   t.fingertip_radius = 0.010;
   p.fingers.push_back(t);
   p.finger_names.emplace_back("thumb");
-  p.open_configuration.push_back(detail::joint_vector({0.0, 0.15, 0.0, 0.30, 0.35}));
-  p.grasp_configuration.push_back(detail::joint_vector({0.0, 0.35, 0.0, 0.50, 0.60}));
+  p.open_configuration.push_back(detail::joint_vector({0.0, 0.310, 0.0, 0.981, 1.465}));
+  p.grasp_configuration.push_back(detail::joint_vector({0.0, 0.762, 0.0, 0.876, 1.150}));
   p.approach_directions.push_back(-uy);
   p.approach_points.push_back(Eigen::Vector3d(0.0, 0.0, 0.0));
   p.thumb = 3;
@@ -161,7 +164,7 @@ inline HandPreset three_finger_hand() {
   for (int k = 0; k < 3; ++k) {
     PlantFinger f;
     f.joints.resize(3);
-    f.base.position = Eigen::Vector3d(xs[k], side[k] * 0.088, 0.048);
+    f.base.position = Eigen::Vector3d(xs[k], side[k] * 0.0675, 0.045);
     const Eigen::Vector3d flex = -side[k] * ux;  // curls the tip towards the object
     f.joints[0] = make_joint(zero, uy, -0.5, 0.5, kVel);
     f.joints[1] = make_joint(zero, flex, -0.3, 1.6, kVel);
@@ -170,8 +173,8 @@ inline HandPreset three_finger_hand() {
     f.fingertip_radius = 0.010;
     p.fingers.push_back(f);
     p.finger_names.emplace_back(names[k]);
-    p.open_configuration.push_back(detail::joint_vector({0.0, 0.25, 0.75}));
-    p.grasp_configuration.push_back(detail::joint_vector({0.0, 0.5, 1.0}));
+    p.open_configuration.push_back(detail::joint_vector({0.0, -0.186, 1.349}));
+    p.grasp_configuration.push_back(detail::joint_vector({0.0, 0.056, 1.638}));
     p.approach_directions.push_back(side[k] * uy);
     p.approach_points.push_back(Eigen::Vector3d(xs[k], 0.0, 0.0));
   }

@@ -177,7 +177,7 @@ struct ObjectShape {
 
   SurfaceQuery query_cylinder(const Eigen::Vector3d& p) const noexcept {
     SurfaceQuery q;
-    const double rho = std::hypot(p.x(), p.y());
+    const double rho = std::sqrt(p.x() * p.x() + p.y() * p.y());  // metre scale: no overflow
     const Eigen::Vector2d radial =
         rho > 0.0 ? Eigen::Vector2d(p.x() / rho, p.y() / rho) : Eigen::Vector2d(1.0, 0.0);
     const double dr = rho - radius;                 // > 0: outside the side

@@ -1,0 +1,356 @@
+// Closed-loop scenarios: the reactive controller driving a hand of the analytic plant
+// through the paper's stages (method.md sections 8-9), with per-stage metrics.
+//
+// Stages, each a StageSpec:
+//   grasp      : the object is frozen; start_grasp() towards one target per finger
+//                (the preset's approach point on the object's central plane, approached
+//                along the preset's nominal normal: the controller does not use the
+//                object's geometry); ends when the controller reports `grasped`, or
+//                fails at `duration` (grasp timeout).
+//   hold       : `release` unfreezes the object at the stage start; the task is to keep
+//                the pose the object had when the stage began (the paper's stage 1).
+//   manipulate : the stage's trajectory segments (layer 1), from the desired pose the
+//                previous stage ended on, then `settle` seconds of hold.
+// The controller runs every `control_period` on sensed data (plant.sample_sensors(),
+// tactile(), measured_object_pose()); the plant integrates with its own smaller step.
+// Metrics compare the TRUE object pose with the desired one: position error |p_d - p|
+// (m), orientation error |log(R_d R^T)| (rad); force error |f_measured - f_desired|
+// over touching fingers whose force is servoed (N, and relative to f_desired);
+// slip = growth of the plant's cumulative anchor slip (m); a contact loss is a
+// touching -> not touching transition of the TRUE contact; `dropped` = the position
+// error exceeded `drop_distance` at any tick.
+// Units SI, world frame.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "inhand/controller/reactive_controller.hpp"
+#include "inhand/plant/hand_plant.hpp"
+#include "inhand/plant/presets.hpp"
+
+namespace inhand::plant {
+
+/// The controller type used with plant hands: any finger count, up to 6 joints each.
+using HandController = ReactiveController<double, 3, Dynamic, Dynamic, 6>;
+
+struct StageSpec {
+  enum class Kind { grasp, hold, manipulate };
+  std::string name = "stage";
+  Kind kind = Kind::hold;
+  /// grasp: timeout; hold: duration; manipulate: ignored (segments + settle).
+  double duration = 1.0;
+  bool release = false;  ///< hold: unfreeze the object when the stage starts
+  std::vector<TrajectorySegment<double, 3>> segments;  ///< manipulate
+  double settle = 0.5;   ///< manipulate: hold time after the last segment [s]
+};
+
+struct ScenarioSpec {
+  std::string name = "scenario";
+  HandPreset hand = shadow_like_hand();
+  ObjectDef object{};  ///< pose relative to nothing: world frame
+  PlantParams plant = default_plant_params();
+  HandController::Config controller{};  ///< fingers are filled from `hand`
+  std::vector<StageSpec> stages;
+  double drop_distance = 0.02;  ///< m
+  /// Bounds for the hold-stage settling metric.
+  double settle_position_tolerance = 5e-4;    ///< m
+  double settle_orientation_tolerance = 0.01; ///< rad
+};
+
+struct FingerStageMetrics {
+  double slip_distance = 0.0;     ///< m
+  int contact_losses = 0;
+  double max_force_error = 0.0;   ///< N
+  double rms_force_error = 0.0;   ///< N
+  double max_relative_force_error = 0.0;  ///< |f - f_d| / f_d
+  double final_desired_force = 0.0;       ///< N
+  double final_measured_force = 0.0;      ///< N
+};
+
+struct StageMetrics {
+  std::string name;
+  StageSpec::Kind kind = StageSpec::Kind::hold;
+  double start_time = 0.0, end_time = 0.0;  ///< s
+  double rms_position_error = 0.0, max_position_error = 0.0, final_position_error = 0.0;  ///< m
+  double rms_orientation_error = 0.0, max_orientation_error = 0.0,
+         final_orientation_error = 0.0;  ///< rad
+  double max_force_error = 0.0, rms_force_error = 0.0, max_relative_force_error = 0.0;
+  /// hold: time from the stage start after which both errors stay within tolerance
+  /// until the stage end (infinity if never).
+  double settle_time = 0.0;
+  double final_force_residual = 0.0;  ///< |sum f_i n_i| of the plan at the end, N
+  int contact_losses = 0;
+  bool dropped = false;
+  bool completed = true;  ///< grasp: reached `grasped` before the timeout
+  std::vector<FingerStageMetrics> fingers;
+};
+
+struct ScenarioResult {
+  std::vector<StageMetrics> stages;
+  bool dropped = false;
+  int contact_losses = 0;  ///< after the grasp stage
+  std::string failure;     ///< empty on success; otherwise why the run stopped early
+};
+
+/// One control tick as seen by a trace writer.
+struct TickRecord {
+  double time = 0.0;
+  int stage = 0;
+  const Pose<double, 3>* desired = nullptr;
+  const Pose<double, 3>* actual = nullptr;
+  const HandController::Input* input = nullptr;
+  const HandController::Output* output = nullptr;
+  ControllerStatus status = ControllerStatus::idle;
+  const HandPlant* plant = nullptr;
+};
+
+/// Fills controller.fingers from the hand (the thumb balances, the others are preset).
+inline HandController::Config controller_config_for(const HandPreset& hand,
+                                                    HandController::Config base) {
+  base.fingers.clear();
+  for (std::size_t i = 0; i < hand.fingers.size(); ++i) {
+    HandController::FingerConfig f;
+    f.chain = hand.fingers[i];
+    f.role = static_cast<int>(i) == hand.thumb ? FingerRole::balancing : FingerRole::preset;
+    base.fingers.push_back(f);
+  }
+  return base;
+}
+
+/// Grasp targets that need no object model: each finger aims at its approach point
+/// (on the object's central plane) along the preset's nominal normal.
+inline std::vector<GraspTarget<double, 3>> model_free_grasp_targets(const HandPreset& hand,
+                                                                    const Pose<double, 3>& object) {
+  std::vector<GraspTarget<double, 3>> t(hand.fingers.size());
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    // The preset's approach geometry is given for its nominal object pose; carry it
+    // with the object's actual pose.
+    const Pose<double, 3> rel = object * hand.object_pose.inverse();
+    t[i].contact_point = rel.transform_point(hand.approach_points[i]);
+    t[i].normal = rel.rotation * hand.approach_directions[i];
+  }
+  return t;
+}
+
+class ScenarioRunner {
+ public:
+  using TickObserver = std::function<void(const TickRecord&)>;
+
+  /// Runs the scenario; throws std::invalid_argument on an invalid specification.
+  ScenarioResult run(const ScenarioSpec& spec, const TickObserver& observer = {}) const {
+    HandPlant plant(spec.hand.fingers, spec.object, spec.plant);
+    for (int i = 0; i < plant.finger_count(); ++i)
+      plant.set_joint_positions(i, spec.hand.open_configuration[static_cast<std::size_t>(i)]);
+    HandController controller;
+    const HandController::Config cfg = controller_config_for(spec.hand, spec.controller);
+    const Validation v = controller.configure(cfg);
+    if (!v.ok()) throw std::invalid_argument(std::string("controller: ") + v.field + ": " + v.reason);
+    const double dt = cfg.control_period;
+    HandController::Input in = controller.make_input();
+    HandController::Output out = controller.make_output();
+    const int n = plant.finger_count();
+
+    ScenarioResult result;
+    Pose<double, 3> desired_end = spec.object.pose;  // desired pose the last stage ended on
+    std::vector<bool> was_touching(static_cast<std::size_t>(n), false);
+    bool grasp_done = false;
+    double t = 0.0;
+    for (std::size_t si = 0; si < spec.stages.size(); ++si) {
+      const StageSpec& st = spec.stages[si];
+      StageMetrics m;
+      m.name = st.name;
+      m.kind = st.kind;
+      m.start_time = t;
+      m.fingers.resize(static_cast<std::size_t>(n));
+      std::vector<double> slip0(static_cast<std::size_t>(n));
+      for (int i = 0; i < n; ++i) slip0[static_cast<std::size_t>(i)] = plant.contact(i).slip_distance;
+      double stage_duration = st.duration;
+      if (st.kind == StageSpec::Kind::grasp) {
+        plant.set_frozen(true);
+        const auto targets = model_free_grasp_targets(spec.hand, plant.object_pose());
+        const Validation g = controller.start_grasp(targets);
+        if (!g.ok()) throw std::invalid_argument(std::string("grasp targets: ") + g.field);
+      } else {
+        if (st.release) plant.set_frozen(false);
+        HandController::Trajectory traj;
+        traj.reset(desired_end);
+        if (st.kind == StageSpec::Kind::hold) {
+          traj.append(TrajectorySegment<double, 3>::hold_for(st.duration));
+        } else {
+          stage_duration = st.settle;
+          for (const auto& seg : st.segments) {
+            if (!traj.append(seg)) throw std::invalid_argument("invalid trajectory segment in " + st.name);
+            stage_duration += seg.duration;
+          }
+        }
+        const Validation s = controller.start_manipulation(traj);
+        if (!s.ok()) {
+          result.failure = "stage '" + st.name + "' could not start: " + s.reason;
+          m.completed = false;
+          result.stages.push_back(m);
+          break;
+        }
+      }
+      const long ticks = std::lround(stage_duration / dt);
+      double sum_p2 = 0.0, sum_r2 = 0.0, sum_f2 = 0.0;
+      long f_samples = 0;
+      std::vector<double> finger_f2(static_cast<std::size_t>(n), 0.0);
+      std::vector<long> finger_fs(static_cast<std::size_t>(n), 0);
+      double last_outside = 0.0;  // time (from stage start) of the last tick outside tolerance
+      bool grasped = false;
+      long k = 0;
+      for (; k < ticks; ++k) {
+        plant.sample_sensors();
+        in.time = t + dt;  // strictly increasing, starts at dt
+        in.object_pose = plant.measured_object_pose();
+        for (int i = 0; i < n; ++i) {
+          auto& fi = in.fingers[static_cast<std::size_t>(i)];
+          fi.joint_positions = plant.joint_positions(i);
+          const TactileReading r = plant.tactile(i);
+          fi.contact.touching = r.touching;
+          if (r.touching) {
+            fi.contact.contact_point = r.contact_point;
+            fi.contact.normal = r.normal;
+            fi.contact.normal_force = r.normal_force;
+          }
+        }
+        const ControllerStatus status = controller.update(in, out);
+        for (int i = 0; i < n; ++i)
+          plant.set_joint_velocity_command(i, out.fingers[static_cast<std::size_t>(i)].joint_velocities);
+        plant.step(dt);
+        t += dt;
+
+        // Metrics on the truth after the step.
+        const Pose<double, 3>& actual = plant.object_pose();
+        const Pose<double, 3>& desired =
+            st.kind == StageSpec::Kind::grasp ? plant.object_pose() : out.desired_object_pose;
+        const double ep = (desired.position - actual.position).norm();
+        const double er = so3_log<double>(desired.rotation * actual.rotation.transpose()).norm();
+        sum_p2 += ep * ep;
+        sum_r2 += er * er;
+        m.max_position_error = std::max(m.max_position_error, ep);
+        m.max_orientation_error = std::max(m.max_orientation_error, er);
+        m.final_position_error = ep;
+        m.final_orientation_error = er;
+        if (ep > spec.drop_distance) m.dropped = true;
+        if (ep > spec.settle_position_tolerance || er > spec.settle_orientation_tolerance)
+          last_outside = static_cast<double>(k + 1) * dt;
+        for (int i = 0; i < n; ++i) {
+          const auto& fo = out.fingers[static_cast<std::size_t>(i)];
+          FingerStageMetrics& fm = m.fingers[static_cast<std::size_t>(i)];
+          const bool touching = plant.contact(i).active;
+          if (grasp_done && was_touching[static_cast<std::size_t>(i)] && !touching) ++fm.contact_losses;
+          was_touching[static_cast<std::size_t>(i)] = touching;
+          if (fo.desired_normal_force > 0.0 && in.fingers[static_cast<std::size_t>(i)].contact.touching &&
+              status != ControllerStatus::invalid_input) {
+            const double fe = std::abs(plant.contact(i).normal_force - fo.desired_normal_force);
+            fm.max_force_error = std::max(fm.max_force_error, fe);
+            fm.max_relative_force_error =
+                std::max(fm.max_relative_force_error, fe / fo.desired_normal_force);
+            finger_f2[static_cast<std::size_t>(i)] += fe * fe;
+            ++finger_fs[static_cast<std::size_t>(i)];
+            sum_f2 += fe * fe;
+            ++f_samples;
+          }
+          fm.final_desired_force = fo.desired_normal_force;
+          fm.final_measured_force = plant.contact(i).normal_force;
+        }
+        m.final_force_residual = out.force_residual.norm();
+        if (observer) {
+          TickRecord rec;
+          rec.time = t;
+          rec.stage = static_cast<int>(si);
+          rec.desired = &desired;
+          rec.actual = &actual;
+          rec.input = &in;
+          rec.output = &out;
+          rec.status = status;
+          rec.plant = &plant;
+          observer(rec);
+        }
+        if (st.kind == StageSpec::Kind::grasp && status == ControllerStatus::grasped) {
+          grasped = true;
+          ++k;
+          break;
+        }
+      }
+      const double count = static_cast<double>(std::max<long>(k, 1));
+      m.rms_position_error = std::sqrt(sum_p2 / count);
+      m.rms_orientation_error = std::sqrt(sum_r2 / count);
+      m.rms_force_error = f_samples > 0 ? std::sqrt(sum_f2 / static_cast<double>(f_samples)) : 0.0;
+      m.end_time = t;
+      m.settle_time = last_outside >= static_cast<double>(k) * dt - 0.5 * dt
+                          ? std::numeric_limits<double>::infinity()
+                          : last_outside;
+      for (int i = 0; i < n; ++i) {
+        FingerStageMetrics& fm = m.fingers[static_cast<std::size_t>(i)];
+        const std::size_t ui = static_cast<std::size_t>(i);
+        fm.slip_distance = plant.contact(i).slip_distance - slip0[ui];
+        fm.rms_force_error = finger_fs[ui] > 0 ? std::sqrt(finger_f2[ui] / static_cast<double>(finger_fs[ui])) : 0.0;
+        m.contact_losses += fm.contact_losses;
+        m.max_force_error = std::max(m.max_force_error, fm.max_force_error);
+        m.max_relative_force_error = std::max(m.max_relative_force_error, fm.max_relative_force_error);
+      }
+      if (st.kind == StageSpec::Kind::grasp) {
+        m.completed = grasped;
+        grasp_done = grasped;
+      } else {
+        desired_end = out.desired_object_pose;
+        result.contact_losses += m.contact_losses;
+      }
+      result.dropped = result.dropped || m.dropped;
+      result.stages.push_back(m);
+      if (st.kind == StageSpec::Kind::grasp && !grasped) {
+        result.failure = "grasp stage '" + st.name + "' timed out";
+        break;
+      }
+    }
+    return result;
+  }
+};
+
+}  // namespace inhand::plant
+
+namespace inhand::plant {
+
+enum class PaperObject { cylinder, slender_box };
+enum class PaperTask { translate, rotate };
+
+/// One of the paper's 12 experiments (method.md section 9): object x {translate,
+/// rotate} x axis (0 = X, 1 = Y, 2 = Z of the reference frame). Stage 0 grasps at the
+/// nominal force with the object frozen, stage 1 releases and holds, stage 2 moves
+/// 5 mm along the axis and back, or rotates 0 -> -0.2 rad -> 0 about it.
+inline ScenarioSpec paper_scenario(PaperObject object, PaperTask task, int axis,
+                                   double cycle_duration = 4.0) {
+  ScenarioSpec s;
+  s.hand = shadow_like_hand();
+  s.object = object == PaperObject::cylinder ? paper_cylinder(s.hand) : paper_slender_box(s.hand);
+  static const char* names[] = {"x", "y", "z"};
+  s.name = std::string(object == PaperObject::cylinder ? "cylinder" : "box") + "_" +
+           (task == PaperTask::translate ? "translate_" : "rotate_") + names[axis];
+  StageSpec grasp;
+  grasp.name = "grasp";
+  grasp.kind = StageSpec::Kind::grasp;
+  grasp.duration = 3.0;
+  StageSpec hold;
+  hold.name = "hold";
+  hold.kind = StageSpec::Kind::hold;
+  hold.release = true;
+  hold.duration = 2.0;
+  StageSpec manip;
+  manip.name = "manipulate";
+  manip.kind = StageSpec::Kind::manipulate;
+  manip.settle = 1.0;
+  Twist<double, 3> d = Twist<double, 3>::Zero();
+  if (task == PaperTask::translate) d(axis) = 0.005;
+  else d(3 + axis) = -0.2;
+  manip.segments.push_back(TrajectorySegment<double, 3>::reciprocate(d, cycle_duration, 1));
+  s.stages = {grasp, hold, manip};
+  return s;
+}
+
+}  // namespace inhand::plant
