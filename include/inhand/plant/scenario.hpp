@@ -13,12 +13,8 @@
 //                previous stage ended on, then `settle` seconds of hold.
 // The controller runs every `control_period` on sensed data (plant.sample_sensors(),
 // tactile(), measured_object_pose()); the plant integrates with its own smaller step.
-// Metrics compare the TRUE object pose with the desired one: position error |p_d - p|
-// (m), orientation error |log(R_d R^T)| (rad); force error |f_measured - f_desired|
-// over touching fingers whose force is servoed (N, and relative to f_desired);
-// slip = growth of the plant's cumulative anchor slip (m); a contact loss is a
-// touching -> not touching transition of the TRUE contact; `dropped` = the position
-// error exceeded `drop_distance` at any tick.
+// Metrics: plant/metrics.hpp (true pose against desired, true forces against the
+// plan, slip, contact losses after the grasp, drop).
 // Units SI, world frame.
 #pragma once
 
@@ -30,6 +26,7 @@
 
 #include "inhand/controller/reactive_controller.hpp"
 #include "inhand/plant/hand_plant.hpp"
+#include "inhand/plant/metrics.hpp"
 #include "inhand/plant/presets.hpp"
 
 namespace inhand::plant {
@@ -38,7 +35,7 @@ namespace inhand::plant {
 using HandController = ReactiveController<double, 3, Dynamic, Dynamic, 6>;
 
 struct StageSpec {
-  enum class Kind { grasp, hold, manipulate };
+  using Kind = StageKind;
   std::string name = "stage";
   Kind kind = Kind::hold;
   /// grasp: timeout; hold: duration; manipulate: ignored (segments + settle).
@@ -55,38 +52,7 @@ struct ScenarioSpec {
   PlantParams plant = default_plant_params();
   HandController::Config controller{};  ///< fingers are filled from `hand`
   std::vector<StageSpec> stages;
-  double drop_distance = 0.02;  ///< m
-  /// Bounds for the hold-stage settling metric.
-  double settle_position_tolerance = 5e-4;    ///< m
-  double settle_orientation_tolerance = 0.01; ///< rad
-};
-
-struct FingerStageMetrics {
-  double slip_distance = 0.0;     ///< m
-  int contact_losses = 0;
-  double max_force_error = 0.0;   ///< N
-  double rms_force_error = 0.0;   ///< N
-  double max_relative_force_error = 0.0;  ///< |f - f_d| / f_d
-  double final_desired_force = 0.0;       ///< N
-  double final_measured_force = 0.0;      ///< N
-};
-
-struct StageMetrics {
-  std::string name;
-  StageSpec::Kind kind = StageSpec::Kind::hold;
-  double start_time = 0.0, end_time = 0.0;  ///< s
-  double rms_position_error = 0.0, max_position_error = 0.0, final_position_error = 0.0;  ///< m
-  double rms_orientation_error = 0.0, max_orientation_error = 0.0,
-         final_orientation_error = 0.0;  ///< rad
-  double max_force_error = 0.0, rms_force_error = 0.0, max_relative_force_error = 0.0;
-  /// hold: time from the stage start after which both errors stay within tolerance
-  /// until the stage end (infinity if never).
-  double settle_time = 0.0;
-  double final_force_residual = 0.0;  ///< |sum f_i n_i| of the plan at the end, N
-  int contact_losses = 0;
-  bool dropped = false;
-  bool completed = true;  ///< grasp: reached `grasped` before the timeout
-  std::vector<FingerStageMetrics> fingers;
+  MetricsTolerances tolerances{};
 };
 
 struct ScenarioResult {
@@ -156,18 +122,23 @@ class ScenarioRunner {
 
     ScenarioResult result;
     Pose<double, 3> desired_end = spec.object.pose;  // desired pose the last stage ended on
-    std::vector<bool> was_touching(static_cast<std::size_t>(n), false);
+    std::vector<FingerTruth> truth(static_cast<std::size_t>(n));
+    auto read_truth = [&]() {
+      for (int i = 0; i < n; ++i) {
+        FingerTruth& ft = truth[static_cast<std::size_t>(i)];
+        ft.touching = plant.contact(i).active;
+        ft.normal_force = plant.contact(i).normal_force;
+        ft.slip_distance = plant.contact(i).slip_distance;
+        ft.desired_force = out.fingers[static_cast<std::size_t>(i)].desired_normal_force;
+      }
+    };
+    read_truth();
     bool grasp_done = false;
     double t = 0.0;
+    StageMetricsAccumulator acc;
     for (std::size_t si = 0; si < spec.stages.size(); ++si) {
       const StageSpec& st = spec.stages[si];
-      StageMetrics m;
-      m.name = st.name;
-      m.kind = st.kind;
-      m.start_time = t;
-      m.fingers.resize(static_cast<std::size_t>(n));
-      std::vector<double> slip0(static_cast<std::size_t>(n));
-      for (int i = 0; i < n; ++i) slip0[static_cast<std::size_t>(i)] = plant.contact(i).slip_distance;
+      acc.begin(st.name, st.kind, t, truth, spec.tolerances, grasp_done);
       double stage_duration = st.duration;
       if (st.kind == StageSpec::Kind::grasp) {
         plant.set_frozen(true);
@@ -190,20 +161,14 @@ class ScenarioRunner {
         const Validation s = controller.start_manipulation(traj);
         if (!s.ok()) {
           result.failure = "stage '" + st.name + "' could not start: " + s.reason;
-          m.completed = false;
-          result.stages.push_back(m);
+          result.stages.push_back(acc.finish(t, false));
           break;
         }
       }
       const long ticks = std::lround(stage_duration / dt);
-      double sum_p2 = 0.0, sum_r2 = 0.0, sum_f2 = 0.0;
-      long f_samples = 0;
-      std::vector<double> finger_f2(static_cast<std::size_t>(n), 0.0);
-      std::vector<long> finger_fs(static_cast<std::size_t>(n), 0);
-      double last_outside = 0.0;  // time (from stage start) of the last tick outside tolerance
+      const double stage_start = t;
       bool grasped = false;
-      long k = 0;
-      for (; k < ticks; ++k) {
+      for (long k = 0; k < ticks; ++k) {
         plant.sample_sensors();
         in.time = t + dt;  // strictly increasing, starts at dt
         in.object_pose = plant.measured_object_pose();
@@ -224,42 +189,15 @@ class ScenarioRunner {
         plant.step(dt);
         t += dt;
 
-        // Metrics on the truth after the step.
         const Pose<double, 3>& actual = plant.object_pose();
         const Pose<double, 3>& desired =
             st.kind == StageSpec::Kind::grasp ? plant.object_pose() : out.desired_object_pose;
-        const double ep = (desired.position - actual.position).norm();
-        const double er = so3_log<double>(desired.rotation * actual.rotation.transpose()).norm();
-        sum_p2 += ep * ep;
-        sum_r2 += er * er;
-        m.max_position_error = std::max(m.max_position_error, ep);
-        m.max_orientation_error = std::max(m.max_orientation_error, er);
-        m.final_position_error = ep;
-        m.final_orientation_error = er;
-        if (ep > spec.drop_distance) m.dropped = true;
-        if (ep > spec.settle_position_tolerance || er > spec.settle_orientation_tolerance)
-          last_outside = static_cast<double>(k + 1) * dt;
-        for (int i = 0; i < n; ++i) {
-          const auto& fo = out.fingers[static_cast<std::size_t>(i)];
-          FingerStageMetrics& fm = m.fingers[static_cast<std::size_t>(i)];
-          const bool touching = plant.contact(i).active;
-          if (grasp_done && was_touching[static_cast<std::size_t>(i)] && !touching) ++fm.contact_losses;
-          was_touching[static_cast<std::size_t>(i)] = touching;
-          if (fo.desired_normal_force > 0.0 && in.fingers[static_cast<std::size_t>(i)].contact.touching &&
-              status != ControllerStatus::invalid_input) {
-            const double fe = std::abs(plant.contact(i).normal_force - fo.desired_normal_force);
-            fm.max_force_error = std::max(fm.max_force_error, fe);
-            fm.max_relative_force_error =
-                std::max(fm.max_relative_force_error, fe / fo.desired_normal_force);
-            finger_f2[static_cast<std::size_t>(i)] += fe * fe;
-            ++finger_fs[static_cast<std::size_t>(i)];
-            sum_f2 += fe * fe;
-            ++f_samples;
-          }
-          fm.final_desired_force = fo.desired_normal_force;
-          fm.final_measured_force = plant.contact(i).normal_force;
-        }
-        m.final_force_residual = out.force_residual.norm();
+        double ep = 0.0, er = 0.0;
+        pose_errors<3>(desired, actual, ep, er);
+        read_truth();
+        if (status == ControllerStatus::invalid_input)
+          for (auto& ft : truth) ft.desired_force = 0.0;
+        acc.add_tick(t - stage_start, ep, er, truth, out.force_residual.norm());
         if (observer) {
           TickRecord rec;
           rec.time = t;
@@ -274,29 +212,12 @@ class ScenarioRunner {
         }
         if (st.kind == StageSpec::Kind::grasp && status == ControllerStatus::grasped) {
           grasped = true;
-          ++k;
           break;
         }
       }
-      const double count = static_cast<double>(std::max<long>(k, 1));
-      m.rms_position_error = std::sqrt(sum_p2 / count);
-      m.rms_orientation_error = std::sqrt(sum_r2 / count);
-      m.rms_force_error = f_samples > 0 ? std::sqrt(sum_f2 / static_cast<double>(f_samples)) : 0.0;
-      m.end_time = t;
-      m.settle_time = last_outside >= static_cast<double>(k) * dt - 0.5 * dt
-                          ? std::numeric_limits<double>::infinity()
-                          : last_outside;
-      for (int i = 0; i < n; ++i) {
-        FingerStageMetrics& fm = m.fingers[static_cast<std::size_t>(i)];
-        const std::size_t ui = static_cast<std::size_t>(i);
-        fm.slip_distance = plant.contact(i).slip_distance - slip0[ui];
-        fm.rms_force_error = finger_fs[ui] > 0 ? std::sqrt(finger_f2[ui] / static_cast<double>(finger_fs[ui])) : 0.0;
-        m.contact_losses += fm.contact_losses;
-        m.max_force_error = std::max(m.max_force_error, fm.max_force_error);
-        m.max_relative_force_error = std::max(m.max_relative_force_error, fm.max_relative_force_error);
-      }
+      const bool completed = st.kind != StageSpec::Kind::grasp || grasped;
+      StageMetrics m = acc.finish(t, completed);
       if (st.kind == StageSpec::Kind::grasp) {
-        m.completed = grasped;
         grasp_done = grasped;
       } else {
         desired_end = out.desired_object_pose;
@@ -304,7 +225,7 @@ class ScenarioRunner {
       }
       result.dropped = result.dropped || m.dropped;
       result.stages.push_back(m);
-      if (st.kind == StageSpec::Kind::grasp && !grasped) {
+      if (!completed) {
         result.failure = "grasp stage '" + st.name + "' timed out";
         break;
       }
