@@ -31,6 +31,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 #include <vector>
 
@@ -109,6 +110,7 @@ enum class ControllerWarning : unsigned {
   twist_limited = 1u << 4,    ///< the commanded object twist was scaled to its limit
   long_tick = 1u << 5,        ///< dt exceeded max_tick: integration used max_tick
   no_balancing_contact = 1u << 6,  ///< no balancing finger touching: forces unbalanced
+  rate_limited = 1u << 7,     ///< some finger's command change was scaled to max_joint_acceleration
 };
 constexpr ControllerWarning operator|(ControllerWarning a, ControllerWarning b) noexcept {
   return static_cast<ControllerWarning>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
@@ -192,6 +194,14 @@ class ReactiveController {
     detail::FingerArray<FingerConfig, NumFingers> fingers{};
     Scalar control_period = Scalar(1e-3);  ///< s, nominal tick (used for the first tick)
     Scalar max_tick = Scalar(0.01);        ///< s, longest dt integrated in one tick
+    /// Command continuity bound (rad/s^2): per finger, the change of the joint-velocity
+    /// command between two ticks is scaled so that no joint changes by more than
+    /// max_joint_acceleration * dt (the direction of the change is kept, the warning
+    /// rate_limited is raised). +infinity (the default) disables it. The bound then
+    /// holds for every cause of a change: a step in the target, a contact loss, a
+    /// grasp-phase transition. It is relative to the last VALID tick's command: the
+    /// zero-velocity fallback of an invalid tick does not reset it.
+    Scalar max_joint_acceleration = std::numeric_limits<Scalar>::infinity();
     PoseFeedback<Scalar> pose_feedback{};
     ServoGains<Scalar> servo{};
     IkParams<Scalar> ik{};
@@ -260,6 +270,8 @@ class ReactiveController {
       return Validation::invalid("control_period", "must be finite and > 0");
     if (!is_finite(c.max_tick) || !(c.max_tick >= c.control_period))
       return Validation::invalid("max_tick", "must be finite and >= control_period");
+    if (!(c.max_joint_acceleration > Scalar(0)) || c.max_joint_acceleration != c.max_joint_acceleration)
+      return Validation::invalid("max_joint_acceleration", "must be > 0 (+inf disables)");
     Validation v = c.pose_feedback.validate();
     if (!v.ok()) return v;
     if (!(v = c.servo.validate()).ok()) return v;
@@ -321,6 +333,7 @@ class ReactiveController {
       s.servo.reset();
       s.state = FingerState::idle;
       s.had_contact = false;
+      s.qdot.setZero();
     }
   }
 
@@ -524,6 +537,16 @@ class ReactiveController {
     fo.ik = s.ik.solve(s.jacobian, fo.servo.total, s.max_velocity, fo.joint_velocities);
     if (has(fo.ik.status, IkStatus::damped)) w = w | ControllerWarning::ik_damped;
     if (has(fo.ik.status, IkStatus::limited)) w = w | ControllerWarning::joint_velocity_limited;
+    // Command continuity: scale the change since the last command (direction kept).
+    const Scalar max_step = config_.max_joint_acceleration * dt;
+    if (max_step < std::numeric_limits<Scalar>::infinity()) {
+      const Scalar largest = (fo.joint_velocities - s.qdot).cwiseAbs().maxCoeff();
+      if (largest > max_step) {
+        fo.joint_velocities = s.qdot + (max_step / largest) * (fo.joint_velocities - s.qdot);
+        w = w | ControllerWarning::rate_limited;
+      }
+    }
+    s.qdot = fo.joint_velocities;
     fo.state = s.state;
   }
 
