@@ -1,0 +1,60 @@
+# Shared by scripts/test and scripts/demo (sourced, not run): the Debian packages the
+# project needs, and ensure_packages, which installs the missing ones.
+#
+# Keep this the ONE list of system dependencies. Eigen is the library's only
+# dependency; the rest serve the tests (GoogleTest, Orocos KDL as a reference),
+# benchmarks, examples (Box2D, JSON, CLI11), plots (gnuplot) and the build itself.
+
+INHAND_PACKAGES=(
+  # build tools
+  cmake
+  g++
+  make
+  pkg-config
+  # the library
+  libeigen3-dev
+  # tests and benchmarks
+  libgtest-dev
+  googletest
+  libbenchmark-dev
+  liborocos-kdl-dev
+  # examples and demos
+  libbox2d-dev
+  nlohmann-json3-dev
+  libcli11-dev
+  gnuplot-nox
+)
+
+# Prints the packages of INHAND_PACKAGES that are not installed, one per line.
+inhand_missing_packages() {
+  local pkg status
+  for pkg in "${INHAND_PACKAGES[@]}"; do
+    status=$(dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null || true)
+    if [[ "$status" != "install ok installed" ]]; then
+      echo "$pkg"
+    fi
+  done
+}
+
+# Installs whatever is missing (as root), or prints the command to run and returns 1.
+ensure_packages() {
+  if ! command -v dpkg-query >/dev/null 2>&1; then
+    echo "ensure_packages: dpkg-query not found; this script expects Debian or Ubuntu." >&2
+    echo "Install the equivalents of: ${INHAND_PACKAGES[*]}" >&2
+    return 1
+  fi
+  local missing
+  mapfile -t missing < <(inhand_missing_packages)
+  if [[ ${#missing[@]} -eq 0 ]]; then
+    return 0
+  fi
+  echo "Missing packages: ${missing[*]}"
+  if [[ $(id -u) -ne 0 ]]; then
+    echo "Run as root, or install them with:" >&2
+    echo "  sudo apt-get install -y --no-install-recommends ${missing[*]}" >&2
+    return 1
+  fi
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update
+  apt-get install -y --no-install-recommends "${missing[@]}"
+}
