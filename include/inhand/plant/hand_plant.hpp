@@ -19,26 +19,31 @@
 // the overlap, p_c = object surface point - (delta / 2) n.
 //   normal force   f_n = max(0, k_n delta + c_n delta_dot)            (>= 0, no adhesion)
 //   friction       elasto-plastic bristle (a tangential spring to an anchor that
-//                  slides): z += v_t h; if k_t |z| <= mu f_n the contact sticks and
-//                  f_t = -(k_t z + c_t v_t), clipped to |f_t| <= mu f_n; otherwise the
-//                  anchor slides so that k_t |z| = mu f_n and f_t = -k_t z (Coulomb).
+//                  slides), f_t acting on the fingertip: z += v_t h; if k_t |z| <= mu f_n
+//                  the contact sticks and f_t = -(k_t z + c_t v_t), clipped to
+//                  |f_t| <= mu f_n; otherwise the anchor slides so that k_t |z| = mu f_n
+//                  and f_t = -k_t z (Coulomb, magnitude exactly mu f_n).
 // v_t is the tangential velocity of the fingertip relative to the object at p_c and
-// z the bristle deflection (fingertip relative to the anchor on the object). So under a
-// constant load below mu f_n there is no creep: the contact deflects elastically by at
-// most mu f_n / k_t and holds; above it the anchor slides. |friction| <= mu f_n holds
-// exactly (up to rounding). Rolling needs no special treatment: v_t is the relative
-// velocity of the two material points at the contact, zero for pure rolling.
+// z the bristle deflection (fingertip relative to the anchor on the object), kept in
+// the current tangent plane. The cone |f_t| <= mu f_n holds exactly (up to rounding);
+// the only regularisation is the bristle compliance: a sticking contact deflects
+// elastically by at most mu f_n / k_t (0.4 mm at 1 N with the defaults) and then holds
+// without creep under any constant load below mu f_n; above it the anchor slides.
+// Rolling needs no special treatment: v_t is the relative velocity of the two material
+// points at the contact, zero for pure rolling.
 // Reported contact forces are those acting ON THE OBJECT: -f_n n + friction, so the
 // friction on the object drags it along with the fingertip.
 //
 // Object dynamics: Newton-Euler with the world-frame inertia I_w = R I R^T. The state
 // is (p, R, v, L) with L = I_w omega the world angular momentum; L_dot = tau is the
 // Euler equation I_w omega_dot + omega x I_w omega = tau, gyroscopic term included.
-// One internal step of length h (semi-implicit / symplectic Euler, rotation by the
-// explicit midpoint rule on SO(3)):
-//   forces(state_n); v += h (F/m + g); L += h tau; p += h v;
-//   R_half = exp(h/2 omega(R_n, L)) R_n; R = exp(h omega(R_half, L)) R_n;
-//   q_dot <- lag(command); q += h q_dot (stopped at the limits); forward kinematics.
+// One internal step of length h (semi-implicit / symplectic Euler, rotation by a
+// second-order midpoint rule on SO(3)):
+//   v += h (F_n/m + g); L += h tau_n; p += h v;
+//   omega_half = omega - (h/2) I_w^-1 (omega x L); R = exp(h omega_half) R_n;
+//   q_dot <- lag(command); q += h q_dot (stopped at the limits); forward kinematics;
+//   F_n+1, tau_n+1 = contact forces of the new state (bristles advanced by h).
+// So contact(i) and tactile(i) always describe the current joints and object pose.
 // Frozen mode holds the object exactly at its pose (v = omega = 0); contacts still
 // produce forces and tactile readings (the grasp phase, method.md section 8).
 //
@@ -166,7 +171,8 @@ struct ObjectDef {
   Validation validate() const noexcept {
     const Validation v = shape.validate();
     if (!v.ok()) return v;
-    if (!is_finite(mass) || !(mass > 0.0)) return Validation::invalid("mass", "must be finite and > 0");
+    if (!is_finite(mass) || !(mass > 0.0))
+      return Validation::invalid("mass", "must be finite and > 0");
     if (!pose.is_finite()) return Validation::invalid("pose", "must be finite");
     const double err = (pose.rotation.transpose() * pose.rotation - Eigen::Matrix3d::Identity())
                            .cwiseAbs()
@@ -201,7 +207,8 @@ struct ContactState {
   double penetration = 0.0;
   /// Normal force magnitude f_n [N], >= 0.
   double normal_force = 0.0;
-  /// Contact point [m] and the object's outward unit normal, world frame.
+  /// Contact point [m] and the object's outward unit normal, world frame (inactive:
+  /// the fingertip centre and zero).
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   /// Tangential (friction) force ON THE OBJECT [N]; |friction_force| <= mu f_n.
@@ -333,7 +340,8 @@ class HandPlant {
       throw std::invalid_argument(msg);
     }
     h_ = params.time_step;
-    lag_alpha_ = params.joint_velocity_lag > 0.0 ? 1.0 - std::exp(-h_ / params.joint_velocity_lag) : 1.0;
+    lag_alpha_ =
+        params.joint_velocity_lag > 0.0 ? 1.0 - std::exp(-h_ / params.joint_velocity_lag) : 1.0;
     inertia_ = object.shape.principal_inertia(object.mass);
     inertia_inv_ = inertia_.cwiseInverse();
     pose_ = object.pose;
@@ -413,6 +421,7 @@ class HandPlant {
       velocity_.setZero();
       momentum_.setZero();
       omega_.setZero();
+      refresh_contacts();
     }
   }
   bool frozen() const noexcept { return frozen_; }
@@ -468,13 +477,15 @@ class HandPlant {
     const auto target = static_cast<std::int64_t>(std::llround(requested_time_ / h_));
     int n = 0;
     while (steps_ < target) {
-      step_once();
+      integrate();
+      ++steps_;
       ++n;
     }
     return n;
   }
-  /// Exactly one internal step.
+  /// Exactly one internal step (counted as a requested duration of one step).
   void step_once() noexcept {
+    requested_time_ += h_;
     integrate();
     ++steps_;
   }
@@ -490,7 +501,9 @@ class HandPlant {
     return 0.5 * object_.mass * velocity_.squaredNorm() + 0.5 * omega_.dot(momentum_);
   }
   /// Gravitational potential energy -m g . p [J] (zero at the world origin).
-  double potential_energy() const noexcept { return -object_.mass * params_.gravity.dot(pose_.position); }
+  double potential_energy() const noexcept {
+    return -object_.mass * params_.gravity.dot(pose_.position);
+  }
   /// Energy stored in the contact springs: sum of k_n delta^2 / 2 + k_t |z|^2 / 2 [J].
   double elastic_energy() const noexcept {
     double e = 0.0;
@@ -501,7 +514,9 @@ class HandPlant {
              0.5 * c.tangential_stiffness * f.contact.deflection.squaredNorm();
     return e;
   }
-  double total_energy() const noexcept { return kinetic_energy() + potential_energy() + elastic_energy(); }
+  double total_energy() const noexcept {
+    return kinetic_energy() + potential_energy() + elastic_energy();
+  }
 
   // ---- sensing --------------------------------------------------------------------
 
@@ -568,7 +583,12 @@ class HandPlant {
           ws(chain),
           q(JointVector::Zero(chain.dof())),
           qd(JointVector::Zero(chain.dof())),
-          qd_cmd(JointVector::Zero(chain.dof())) {
+          qd_cmd(JointVector::Zero(chain.dof())),
+          sin_q(JointVector::Zero(chain.dof())),
+          cos_q(JointVector::Ones(chain.dof())),
+          sin_dq(JointVector::Zero(chain.dof())),
+          cos_dq(JointVector::Ones(chain.dof())),
+          trig_qd(JointVector::Zero(chain.dof())) {
       for (int j = 0; j < chain.dof(); ++j) {
         const auto& jd = chain.joints[j];
         JointConstants& jc = constants[static_cast<std::size_t>(j)];
@@ -580,7 +600,8 @@ class HandPlant {
         jc.K2 = jc.K * jc.K;
         for (int k = 0; k < 3; ++k) {
           const double a = jd.axis(k);
-          if ((a == 1.0 || a == -1.0) && jd.axis((k + 1) % 3) == 0.0 && jd.axis((k + 2) % 3) == 0.0) {
+          if ((a == 1.0 || a == -1.0) && jd.axis((k + 1) % 3) == 0.0 &&
+              jd.axis((k + 2) % 3) == 0.0) {
             jc.principal = k;
             jc.sign = a;
           }
@@ -593,6 +614,11 @@ class HandPlant {
     bool tip_identity_rotation = true;
     FingerKinematics<PlantFinger> ws;
     JointVector q, qd, qd_cmd;
+    // sin/cos of q, advanced by the angle-addition formula with the sin/cos of h qd
+    // (computed for the joint velocity trig_qd) while qd stays constant, recomputed
+    // exactly whenever qd changes and every kResyncSteps steps.
+    JointVector sin_q, cos_q, sin_dq, cos_dq, trig_qd;
+    int steps_since_sync = 0;
     Eigen::Vector3d tip_velocity = Eigen::Vector3d::Zero();  // of the sphere centre
     Eigen::Vector3d tip_omega = Eigen::Vector3d::Zero();     // of the distal link
     ContactState contact{};
@@ -610,9 +636,12 @@ class HandPlant {
   static double effective_mass(const ObjectDef& object) noexcept {
     const Eigen::Vector3d I = object.shape.principal_inertia(object.mass);
     const ObjectShape& s = object.shape;
-    Eigen::Vector3d rho2 = Eigen::Vector3d::Ones();  // squared largest surface distance from each axis
+    Eigen::Vector3d rho2 =
+        Eigen::Vector3d::Ones();  // squared largest surface distance from each axis
     switch (s.kind) {
-      case ObjectShape::Kind::sphere: rho2.setConstant(s.radius * s.radius); break;
+      case ObjectShape::Kind::sphere:
+        rho2.setConstant(s.radius * s.radius);
+        break;
       case ObjectShape::Kind::box: {
         const Eigen::Vector3d e = s.half_extents.cwiseAbs2();
         rho2 = Eigen::Vector3d(e.y() + e.z(), e.x() + e.z(), e.x() + e.y());
@@ -634,8 +663,12 @@ class HandPlant {
     return R * inertia_inv_.cwiseProduct(R.transpose() * L);
   }
 
-  /// Forward kinematics and the fingertip's rigid-body velocity from q and qd.
+  /// Exact sin/cos of q, forward kinematics and the fingertip's rigid-body velocity.
   static void update_kinematics(Finger& f) noexcept {
+    for (int j = 0; j < f.chain.dof(); ++j) {
+      f.sin_q(j) = std::sin(f.q(j));
+      f.cos_q(j) = std::cos(f.q(j));
+    }
     fast_forward_kinematics(f);
     update_tip_velocity(f);
   }
@@ -648,7 +681,7 @@ class HandPlant {
       p.noalias() += R * jc.offset;
       if (!jc.identity_rotation) R = (R * jc.rotation).eval();
       f.ws.joint_origins.col(j) = p;
-      const double s = std::sin(f.q(j)), c = std::cos(f.q(j));
+      const double s = f.sin_q(j), c = f.cos_q(j);
       if (jc.principal >= 0) {
         // R * Rot(sign q, e_k): with (i, l) the cyclic successors of k,
         // col_i <- c col_i + s' col_l, col_l <- -s' col_i + c col_l, s' = sign sin q.
@@ -707,8 +740,8 @@ class HandPlant {
     const Eigen::Vector3d n = R * sq.normal;
     const Eigen::Vector3d point = pose_.position + R * sq.closest - (0.5 * pen) * n;
     const Eigen::Vector3d r_obj = point - pose_.position;
-    const Eigen::Vector3d v_rel = (f.tip_velocity + f.tip_omega.cross(point - centre)) -
-                                  (velocity_ + omega_.cross(r_obj));
+    const Eigen::Vector3d v_rel =
+        (f.tip_velocity + f.tip_omega.cross(point - centre)) - (velocity_ + omega_.cross(r_obj));
     const double vn = n.dot(v_rel);
     const double fn = std::max(0.0, cp.normal_stiffness * pen - cp.normal_damping * vn);
     const Eigen::Vector3d vt = v_rel - vn * n;
@@ -753,18 +786,17 @@ class HandPlant {
 
   void integrate() noexcept {
     const double h = h_;
-    force_sum_.setZero();
-    torque_sum_.setZero();
-    for (auto& f : fingers_) evaluate_contact(f, h);
-
+    // force_sum_ / torque_sum_ hold the contact forces of the current state (evaluated at
+    // the end of the previous step or by a setter).
     if (!frozen_) {
       velocity_ += h * ((force_sum_ + external_force_) / object_.mass + params_.gravity);
       momentum_ += h * (torque_sum_ + external_torque_);
       pose_.position += h * velocity_;
       const Eigen::Matrix3d R0 = pose_.rotation;
       const Eigen::Vector3d w0 = omega_from(R0, momentum_);
-      const Eigen::Matrix3d R_half = so3_exp<double>(Eigen::Vector3d(0.5 * h * w0)) * R0;
-      const Eigen::Vector3d w_half = omega_from(R_half, momentum_);
+      // omega at the half step to O(h^2): omega_dot = -I_w^-1 (omega x L) with L already
+      // holding this step's torque impulse (the Euler equation's gyroscopic term).
+      const Eigen::Vector3d w_half = w0 - (0.5 * h) * omega_from(R0, w0.cross(momentum_));
       Eigen::Matrix3d R1 = so3_exp<double>(Eigen::Vector3d(h * w_half)) * R0;
       // One Newton step towards orthonormality keeps rounding from accumulating.
       R1 = R1 * (1.5 * Eigen::Matrix3d::Identity() - 0.5 * (R1.transpose() * R1));
@@ -775,25 +807,49 @@ class HandPlant {
     for (auto& f : fingers_) {
       const int n = f.chain.dof();
       bool moved = false;
+      const bool resync = ++f.steps_since_sync >= kResyncSteps;
+      if (resync) f.steps_since_sync = 0;
       for (int j = 0; j < n; ++j) {
         double qd = f.qd(j) + lag_alpha_ * (f.qd_cmd(j) - f.qd(j));
         if (qd != 0.0) {
           double q = f.q(j) + h * qd;
           const auto& jd = f.chain.joints[j];
+          bool exact = resync || qd != f.qd(j);
           if (q > jd.upper || q < jd.lower) {
             q = q > jd.upper ? jd.upper : jd.lower;
             qd = 0.0;
+            exact = true;
             ++f.counters.position_limited;
           }
           if (q != f.q(j)) moved = true;
           f.q(j) = q;
+          if (exact) {
+            f.sin_q(j) = std::sin(q);
+            f.cos_q(j) = std::cos(q);
+          } else {
+            if (qd != f.trig_qd(j)) {
+              f.sin_dq(j) = std::sin(h * qd);
+              f.cos_dq(j) = std::cos(h * qd);
+              f.trig_qd(j) = qd;
+            }
+            const double s0 = f.sin_q(j), c0 = f.cos_q(j);
+            f.sin_q(j) = s0 * f.cos_dq(j) + c0 * f.sin_dq(j);
+            f.cos_q(j) = c0 * f.cos_dq(j) - s0 * f.sin_dq(j);
+          }
         }
         f.qd(j) = qd;
       }
       if (moved) fast_forward_kinematics(f);
       update_tip_velocity(f);
     }
+
+    // Contacts of the new state: reported now, applied in the next step.
+    force_sum_.setZero();
+    torque_sum_.setZero();
+    for (auto& f : fingers_) evaluate_contact(f, h);
   }
+
+  static constexpr int kResyncSteps = 1000;
 
   PlantParams params_;
   ObjectDef object_;

@@ -89,23 +89,33 @@ struct ObjectShape {
   /// Closest surface point, signed distance and outward normal for point p.
   SurfaceQuery query(const Eigen::Vector3d& p) const noexcept {
     switch (kind) {
-      case Kind::sphere: return query_sphere(p);
-      case Kind::box: return query_box(p);
-      case Kind::cylinder: return query_cylinder(p);
+      case Kind::sphere:
+        return query_sphere(p);
+      case Kind::box:
+        return query_box(p);
+      case Kind::cylinder:
+        return query_cylinder(p);
     }
     return SurfaceQuery{};
   }
   double signed_distance(const Eigen::Vector3d& p) const noexcept { return query(p).distance; }
-  Eigen::Vector3d closest_point(const Eigen::Vector3d& p) const noexcept { return query(p).closest; }
-  Eigen::Vector3d outward_normal(const Eigen::Vector3d& p) const noexcept { return query(p).normal; }
+  Eigen::Vector3d closest_point(const Eigen::Vector3d& p) const noexcept {
+    return query(p).closest;
+  }
+  Eigen::Vector3d outward_normal(const Eigen::Vector3d& p) const noexcept {
+    return query(p).normal;
+  }
 
   /// Volume [m^3].
   double volume() const noexcept {
     constexpr double kPi = 3.14159265358979323846;
     switch (kind) {
-      case Kind::sphere: return 4.0 / 3.0 * kPi * radius * radius * radius;
-      case Kind::box: return 8.0 * half_extents.prod();
-      case Kind::cylinder: return kPi * radius * radius * 2.0 * half_length;
+      case Kind::sphere:
+        return 4.0 / 3.0 * kPi * radius * radius * radius;
+      case Kind::box:
+        return 8.0 * half_extents.prod();
+      case Kind::cylinder:
+        return kPi * radius * radius * 2.0 * half_length;
     }
     return 0.0;
   }
@@ -114,7 +124,8 @@ struct ObjectShape {
   /// of uniform density and the given mass [kg m^2].
   Eigen::Vector3d principal_inertia(double mass) const noexcept {
     switch (kind) {
-      case Kind::sphere: return Eigen::Vector3d::Constant(0.4 * mass * radius * radius);
+      case Kind::sphere:
+        return Eigen::Vector3d::Constant(0.4 * mass * radius * radius);
       case Kind::box: {
         const Eigen::Vector3d s = half_extents.cwiseAbs2();  // (2h)^2 / 12 = h^2 / 3
         return (mass / 3.0) * Eigen::Vector3d(s.y() + s.z(), s.x() + s.z(), s.x() + s.y());
@@ -134,9 +145,12 @@ struct ObjectShape {
   /// Radius of the smallest origin-centred sphere containing the shape [m].
   double bounding_radius() const noexcept {
     switch (kind) {
-      case Kind::sphere: return radius;
-      case Kind::box: return half_extents.norm();
-      case Kind::cylinder: return std::sqrt(radius * radius + half_length * half_length);
+      case Kind::sphere:
+        return radius;
+      case Kind::box:
+        return half_extents.norm();
+      case Kind::cylinder:
+        return std::sqrt(radius * radius + half_length * half_length);
     }
     return 0.0;
   }
@@ -180,7 +194,7 @@ struct ObjectShape {
     const double rho = std::sqrt(p.x() * p.x() + p.y() * p.y());  // metre scale: no overflow
     const Eigen::Vector2d radial =
         rho > 0.0 ? Eigen::Vector2d(p.x() / rho, p.y() / rho) : Eigen::Vector2d(1.0, 0.0);
-    const double dr = rho - radius;                 // > 0: outside the side
+    const double dr = rho - radius;                   // > 0: outside the side
     const double dz = std::abs(p.z()) - half_length;  // > 0: beyond a cap
     const double zside = p.z() >= 0.0 ? 1.0 : -1.0;
     if (dr > 0.0 || dz > 0.0) {
