@@ -72,7 +72,11 @@ class ContactIk {
   using JointVector = Eigen::Matrix<Scalar, N, 1, Eigen::ColMajor, MaxN, 1>;
   using PseudoInverse = Eigen::Matrix<Scalar, N, Dim, Eigen::ColMajor, MaxN, Dim>;
 
-  explicit ContactIk(int dof = (N == Eigen::Dynamic ? 0 : N), const IkParams<Scalar>& params = {})
+  // The default argument is spelled IkParams<Scalar>() rather than {}: GCC 12 at -O3
+  // reports the {}-initialised temporary as "used uninitialized" (a false positive)
+  // when a ContactIk is value-initialised inside an aggregate such as std::array.
+  explicit ContactIk(int dof = (N == Eigen::Dynamic ? 0 : N),
+                     const IkParams<Scalar>& params = IkParams<Scalar>())
       : params_(params), dls_(dof) {
     ns_.setZero(dof);
     pinv_.setZero(dof, Dim);

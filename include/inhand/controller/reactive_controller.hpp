@@ -220,9 +220,12 @@ class ReactiveController {
   struct FingerInput {
     JointVector joint_positions{};  ///< rad, size = the finger's DOF
     TactileContact contact{};
-    /// KinematicsSource::external only: the Dim x DOF Jacobian of the contact point
-    /// (when touching) or of the virtual contact point (when not), and that virtual
-    /// contact point (fingertip surface point facing the object, world frame).
+    /// KinematicsSource::external only: the Dim x DOF Jacobian of the point the
+    /// controller servoes, and the virtual contact point (fingertip surface point
+    /// facing the object, world frame). That point is, as in the chain mode: when not
+    /// touching, the virtual contact point; when touching during the grasp phase
+    /// (approaching/pressing, object held fixed), the fingertip sphere centre; when
+    /// touching during manipulation, the measured contact point.
     Jacobian jacobian{};
     Vec virtual_contact_point = Vec::Zero();
   };

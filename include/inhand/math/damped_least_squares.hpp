@@ -61,7 +61,7 @@ struct DampingSchedule {
 
 /// Solver for an M x N matrix with M <= 3 (a contact Jacobian: M = Dim). N may be
 /// Eigen::Dynamic, with MaxN a fixed capacity or Eigen::Dynamic. Because k = min(M, N)
-/// <= 3, the k x k Gram matrix, its eigenvalues (closed form) and its Cholesky factor
+/// <= 3, the k x k Gram matrix, its eigenvalues and its Cholesky factor
 /// live in fixed 3 x 3 storage: no allocation in any size mode.
 /// Accuracy: sigma_min comes from the Gram matrix, so it is resolved down to about
 /// sqrt(machine epsilon) * sigma_max; smaller values read as roughly that floor, far
@@ -129,10 +129,13 @@ class DampedLeastSquares {
       y.template head<M>() = b;
       cholesky_solve(y);
       x.noalias() = J.transpose() * y.template head<M>();
-    } else {
+    } else if constexpr (kTallPossible) {
       for (int a = 0; a < k_; ++a) y(a) = J.col(a).dot(b);
       cholesky_solve(y);
-      x = y.head(k_);
+      // Element-wise: a vectorised copy of y.head(k_) draws GCC 12 -Warray-bounds
+      // false positives for float run-time column counts.
+      x.resize(k_);
+      for (int a = 0; a < k_; ++a) x(a) = y(a);
     }
   }
 
@@ -153,16 +156,21 @@ class DampedLeastSquares {
         inv.col(c) = y.template head<M>();
       }
       out.noalias() = J.transpose() * inv;
-    } else {  // (G + l^2 I)^-1 J^T
+    } else if constexpr (kTallPossible) {  // (G + l^2 I)^-1 J^T
       for (int c = 0; c < M; ++c) {
         for (int a = 0; a < k_; ++a) y(a) = J(c, a);
         cholesky_solve(y);
-        out.col(c) = y.head(k_);
+        for (int a = 0; a < k_; ++a) out(a, c) = y(a);
       }
     }
   }
 
  private:
+  // Fewer columns than rows (least squares) can only occur for a run-time column
+  // count or a fixed N < M. Compiling that branch out otherwise keeps GCC's
+  // -Warray-bounds from flagging the (unreachable) copy of the 3-vector y into a
+  // longer fixed-size solution.
+  static constexpr bool kTallPossible = (N == Eigen::Dynamic) || (N < M);
   /// Smallest eigenvalue of the leading k x k block of the (symmetric) Gram matrix.
   Scalar smallest_eigenvalue() const noexcept {
     if (k_ == 1) return gram_(0, 0);
@@ -175,8 +183,12 @@ class DampedLeastSquares {
       return big > Scalar(0) ? (a * d - b * b) / big : Scalar(0);
     }
     Eigen::Matrix<Scalar, 3, 1> ev;
+    // The iterative (QR) solver is backward stable: |error| ~ eps * |G|, i.e. the
+    // resolution stated above. The closed-form computeDirect() was measured 1e7 times
+    // worse on the smallest eigenvalue of near-singular 3 x 3 Gram matrices (double).
+    // Fixed 3 x 3: no allocation either way.
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 3, 3>> eig;
-    eig.computeDirect(gram_, Eigen::EigenvaluesOnly);
+    eig.compute(gram_, Eigen::EigenvaluesOnly);
     ev = eig.eigenvalues();
     return ev(0);
   }

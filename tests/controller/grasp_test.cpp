@@ -1,0 +1,147 @@
+// Tests of the grasp-phase primitives (controller/grasp.hpp): approach_velocity's
+// saturation and its creep along -n (also past the expected contact point, when the
+// object is smaller than expected), parameter and target validation.
+#include "inhand/controller/grasp.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "common/test_support.hpp"
+
+namespace {
+
+using inhand::approach_velocity;
+using inhand::GraspParams;
+using inhand::GraspTarget;
+using inhand_test::record;
+using inhand_test::scaled;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+template <int Dim>
+void check_saturation_and_creep(std::uint64_t seed) {
+  using Vec = inhand::Vector<double, Dim>;
+  auto rng = inhand_test::make_rng(seed);
+  GraspParams<double> g;
+  const int n = scaled(2000);
+  int saturated = 0, linear = 0;
+  for (int k = 0; k < n; ++k) {
+    const Vec nrm = inhand_test::random_unit_vector<double, Dim>(rng);
+    const Vec p_t = inhand_test::random_vector<double, Dim>(rng, -0.05, 0.05);
+    // Virtual point on the OUTSIDE half-space of the target (where approaches start),
+    // from 0.1 mm to 5 cm away.
+    Vec dir = inhand_test::random_unit_vector<double, Dim>(rng);
+    if (dir.dot(nrm) < 0) dir = -dir;
+    const double dist = inhand_test::log_uniform(rng, 1e-4, 0.05);
+    const Vec p_v = p_t + dist * dir;
+    const Vec v = approach_velocity(g, p_v, p_t, nrm);
+    const Vec p_term = v + g.creep_speed * nrm;  // what remains without the creep
+    // The P term points at the target and is capped at approach_speed.
+    EXPECT_LE(p_term.norm(), g.approach_speed * (1 + 1e-12));
+    EXPECT_GT(p_term.dot(p_t - p_v), 0.0);
+    EXPECT_LT((p_term.normalized() - (p_t - p_v).normalized()).norm(), 1e-9);
+    if (g.approach_gain * dist > g.approach_speed) {
+      EXPECT_NEAR(p_term.norm(), g.approach_speed, 1e-12);
+      ++saturated;
+    } else {
+      EXPECT_LT((p_term - g.approach_gain * (p_t - p_v)).norm(), 1e-15);
+      ++linear;
+    }
+    // The overall speed never exceeds approach + creep, and it always moves towards
+    // the object (against n) from the outside.
+    EXPECT_LE(v.norm(), g.approach_speed + g.creep_speed + 1e-15);
+    EXPECT_LT(v.dot(nrm), 0.0);
+  }
+  EXPECT_GT(saturated, n / 10);
+  EXPECT_GT(linear, n / 10);
+}
+
+TEST(ApproachVelocity, SaturatesTowardsTheTargetPlanar) { check_saturation_and_creep<2>(11); }
+TEST(ApproachVelocity, SaturatesTowardsTheTargetSpatial) { check_saturation_and_creep<3>(12); }
+
+TEST(ApproachVelocity, AtTheTargetCreepsAlongMinusN) {
+  GraspParams<double> g;
+  const Eigen::Vector3d n = Eigen::Vector3d(1, -2, 0.5).normalized();
+  const Eigen::Vector3d p(0.01, 0.02, -0.03);
+  const Eigen::Vector3d v = approach_velocity(g, p, p, n);
+  EXPECT_LT((v + g.creep_speed * n).norm(), 1e-18);
+}
+
+TEST(ApproachVelocity, KeepsCreepingPastTheExpectedContactPoint) {
+  // The geometry is unknown: the real surface lies deeper than the expected contact
+  // point. The finger must keep creeping along -n until contact is sensed (grasp.hpp),
+  // not settle at a fixed offset behind p_t.
+  GraspParams<double> g;
+  const Eigen::Vector2d n(0.0, 1.0);
+  const Eigen::Vector2d p_t(0.004, 0.0);
+  const double dt = 1e-3;
+  Eigen::Vector2d p(0.0, 0.02);  // 2 cm outside, 4 mm to the side
+  double t_reach = -1.0, slowest_inward = 1.0;
+  for (int k = 0; k < 3000; ++k) {
+    const Eigen::Vector2d v = approach_velocity(g, p, p_t, n);
+    if (t_reach < 0 && (p - p_t).dot(n) <= 0.0) t_reach = k * dt;
+    if (t_reach >= 0) slowest_inward = std::min(slowest_inward, -v.dot(n));
+    p += dt * v;
+  }
+  ASSERT_GT(t_reach, 0.0);
+  // Past the target: at least the creep speed inwards, no pull back out.
+  EXPECT_GE(slowest_inward, g.creep_speed * (1 - 1e-12));
+  const double depth = -(p - p_t).dot(n);
+  // Creeping at creep_speed for the rest of the 3 s run.
+  EXPECT_GT(depth, 0.9 * g.creep_speed * (3.0 - t_reach));
+  // Tangentially it converges on the target.
+  EXPECT_LT(std::abs(p.x() - p_t.x()), 1e-6);
+  record("depth_past_target_m", depth);
+}
+
+TEST(GraspParams, ValidationNamesTheField) {
+  struct Case {
+    const char* field;
+    void (*edit)(GraspParams<double>&);
+  };
+  const std::vector<Case> cases = {
+      {"grasp.approach_gain", [](GraspParams<double>& g) { g.approach_gain = 0; }},
+      {"grasp.approach_speed", [](GraspParams<double>& g) { g.approach_speed = kNaN; }},
+      {"grasp.creep_speed", [](GraspParams<double>& g) { g.creep_speed = 0; }},
+      {"grasp.creep_speed", [](GraspParams<double>& g) { g.creep_speed = 1.0; }},
+      {"grasp.tangential_gain", [](GraspParams<double>& g) { g.tangential_gain = -1; }},
+      {"grasp.force_tolerance", [](GraspParams<double>& g) { g.force_tolerance = 0; }},
+      {"grasp.settle_time", [](GraspParams<double>& g) { g.settle_time = -0.1; }},
+  };
+  EXPECT_TRUE(GraspParams<double>{}.validate().ok());
+  for (const Case& c : cases) {
+    GraspParams<double> g;
+    c.edit(g);
+    const inhand::Validation v = g.validate();
+    ASSERT_FALSE(v.ok()) << c.field;
+    EXPECT_EQ(std::string(v.field), c.field);
+  }
+}
+
+TEST(GraspTarget, ValidationRejectsNonUnitOrNonFinite) {
+  GraspTarget<double, 3> t;
+  EXPECT_TRUE(t.validate().ok());
+  t.contact_point(1) = kNaN;
+  EXPECT_EQ(std::string(t.validate().field), "grasp_target.contact_point");
+  t = GraspTarget<double, 3>{};
+  t.normal.setZero();
+  EXPECT_EQ(std::string(t.validate().field), "grasp_target.normal");
+  t.normal = Eigen::Vector3d(3, 0, 0);
+  EXPECT_EQ(std::string(t.validate().field), "grasp_target.normal");
+  t.normal = Eigen::Vector3d(kNaN, 0, 0);
+  EXPECT_EQ(std::string(t.validate().field), "grasp_target.normal");
+}
+
+TEST(FingerState, Names) {
+  EXPECT_EQ(std::string(inhand::to_string(inhand::FingerState::idle)), "idle");
+  EXPECT_EQ(std::string(inhand::to_string(inhand::FingerState::approaching)), "approaching");
+  EXPECT_EQ(std::string(inhand::to_string(inhand::FingerState::pressing)), "pressing");
+  EXPECT_EQ(std::string(inhand::to_string(inhand::FingerState::in_contact)), "in_contact");
+  EXPECT_EQ(std::string(inhand::to_string(inhand::FingerState::reacquiring)), "reacquiring");
+}
+
+}  // namespace

@@ -1,0 +1,415 @@
+// Tests of the trajectory layer (controller/trajectory.hpp): the minimum-jerk profile,
+// pose and feed-forward twist continuity across segment boundaries, the feed-forward
+// twist against central finite differences of the pose (position derivative and
+// so3_log(R(t+h) R(t-h)^T) / 2h), reciprocation, the paper's rotation about X by
+// -0.2 rad, hold, the planar version, capacity, invalid segments and NaN time.
+#include "inhand/controller/trajectory.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "common/test_support.hpp"
+
+namespace {
+
+using inhand::ObjectTrajectory;
+using inhand::Pose;
+using inhand::SegmentKind;
+using inhand::TrajectorySegment;
+using inhand_test::record;
+using inhand_test::scaled;
+
+using Traj3 = ObjectTrajectory<double, 3>;
+using Seg3 = TrajectorySegment<double, 3>;
+using Traj2 = ObjectTrajectory<double, 2>;
+using Seg2 = TrajectorySegment<double, 2>;
+using V3 = Eigen::Vector3d;
+using V2 = Eigen::Vector2d;
+using Twist3 = inhand::Twist<double, 3>;
+using Twist2 = inhand::Twist<double, 2>;
+
+Pose<double, 3> start_pose_3d() {
+  Pose<double, 3> p;
+  p.position = V3(0.01, -0.02, 0.15);
+  p.rotation = inhand::rotation_from_euler<double>(V3(0.3, -0.2, 0.7));
+  return p;
+}
+
+/// A trajectory using every segment kind, with translation and rotation mixed.
+Traj3 mixed_trajectory() {
+  Traj3 tr;
+  tr.reset(start_pose_3d());
+  EXPECT_TRUE(tr.append(Seg3::hold_for(0.25)));
+  EXPECT_TRUE(tr.append(Seg3::move(V3(1, 0, 0), 0.005, 1.0)));
+  EXPECT_TRUE(tr.append(Seg3::rotate(V3(1, 2, 3), 0.3, 1.5)));
+  Twist3 d;
+  d << 0.002, -0.003, 0.001, -0.1, 0.05, 0.2;
+  EXPECT_TRUE(tr.append(Seg3::reciprocate(d, 2.0, 2)));
+  EXPECT_TRUE(tr.append(Seg3::move(V3(0, 1, -1), -0.004, 0.7)));
+  EXPECT_TRUE(tr.append(Seg3::rotate(V3(1, 0, 0), -0.2, 0.8)));
+  return tr;
+}
+
+double rotation_distance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return inhand::so3_log<double>(Eigen::Matrix3d(a * b.transpose())).norm();
+}
+
+// ---------------------------------------------------------------------------
+
+TEST(MinimumJerk, EndpointsMidpointAndDerivative) {
+  double s = -1, ds = -1;
+  inhand::minimum_jerk(0.0, s, ds);
+  EXPECT_EQ(s, 0.0);
+  EXPECT_EQ(ds, 0.0);
+  inhand::minimum_jerk(1.0, s, ds);
+  EXPECT_EQ(s, 1.0);
+  EXPECT_EQ(ds, 0.0);
+  inhand::minimum_jerk(0.5, s, ds);
+  EXPECT_NEAR(s, 0.5, 1e-15);
+  EXPECT_NEAR(ds, 1.875, 1e-15);  // peak speed 15/8 of the mean
+  // Clamped outside [0, 1].
+  inhand::minimum_jerk(-0.3, s, ds);
+  EXPECT_EQ(s, 0.0);
+  EXPECT_EQ(ds, 0.0);
+  inhand::minimum_jerk(1.7, s, ds);
+  EXPECT_EQ(s, 1.0);
+  EXPECT_EQ(ds, 0.0);
+  // ds is the derivative of s, and s is monotone.
+  double prev = 0.0, worst = 0.0;
+  const double h = 1e-6;
+  for (int k = 1; k < 1000; ++k) {
+    const double tau = k / 1000.0;
+    double sp, dsp, sm, dsm;
+    inhand::minimum_jerk(tau + h, sp, dsp);
+    inhand::minimum_jerk(tau - h, sm, dsm);
+    inhand::minimum_jerk(tau, s, ds);
+    worst = std::max(worst, std::abs((sp - sm) / (2 * h) - ds));
+    EXPECT_GT(s, prev);
+    prev = s;
+  }
+  EXPECT_LT(worst, 1e-8);
+}
+
+TEST(ObjectTrajectory, EmptyTrajectoryHoldsTheStartPose) {
+  Traj3 tr;
+  tr.reset(start_pose_3d());
+  EXPECT_EQ(tr.size(), 0);
+  EXPECT_EQ(tr.duration(), 0.0);
+  for (double t : {-1.0, 0.0, 0.5, 100.0}) {
+    const auto s = tr.evaluate(t);
+    EXPECT_EQ(s.segment, -1);
+    EXPECT_TRUE(s.pose.position == start_pose_3d().position);
+    EXPECT_TRUE(s.pose.rotation == start_pose_3d().rotation);
+    EXPECT_TRUE(s.twist.isZero(0.0));
+  }
+}
+
+TEST(ObjectTrajectory, SegmentBoundariesAreContinuousInPoseAndTwist) {
+  const Traj3 tr = mixed_trajectory();
+  ASSERT_EQ(tr.size(), 6);
+  EXPECT_NEAR(tr.duration(), 0.25 + 1.0 + 1.5 + 2.0 + 0.7 + 0.8, 1e-15);
+  // At a boundary both sides are at rest (minimum jerk: zero velocity and acceleration),
+  // so over h the pose may move by at most ~ jerk h^3 and the twist by ~ jerk h^2.
+  const double h = 1e-5;
+  double worst_pose = 0.0, worst_twist = 0.0;
+  for (int i = 0; i <= tr.size(); ++i) {
+    const double tb = tr.segment_start_time(i);
+    const auto at = tr.evaluate(tb);
+    const auto before = tr.evaluate(tb - h);
+    const auto after = tr.evaluate(tb + h);
+    EXPECT_EQ(at.segment, i < tr.size() ? i : -1) << "boundary " << i;
+    for (const auto* side : {&before, &after}) {
+      if (i == 0 && side == &before) continue;  // before the start: the start pose
+      worst_pose = std::max(worst_pose, (side->pose.position - at.pose.position).norm());
+      worst_pose = std::max(worst_pose, rotation_distance(side->pose.rotation, at.pose.rotation));
+      worst_twist = std::max(worst_twist, side->twist.norm());
+    }
+    // Exactly at the boundary the twist is zero.
+    EXPECT_LT(at.twist.norm(), 1e-15) << "boundary " << i;
+  }
+  EXPECT_LT(worst_pose, 1e-12);
+  EXPECT_LT(worst_twist, 1e-7);
+  record("boundary_pose_jump", worst_pose);
+  record("boundary_twist", worst_twist);
+  // Zero twist at both ends, start pose at 0 and before.
+  const auto s0 = tr.evaluate(0.0);
+  EXPECT_TRUE(s0.twist.isZero(0.0));
+  EXPECT_LT((s0.pose.position - start_pose_3d().position).norm(), 1e-15);
+  const auto send = tr.evaluate(tr.duration() + 1.0);
+  EXPECT_EQ(send.segment, -1);
+  EXPECT_TRUE(send.twist.isZero(0.0));
+  const auto neg = tr.evaluate(-0.5);
+  EXPECT_TRUE(neg.twist.isZero(0.0));
+  EXPECT_TRUE(neg.pose.position == start_pose_3d().position);
+}
+
+TEST(ObjectTrajectory, FinalPoseIsTheComposedDisplacement) {
+  const Traj3 tr = mixed_trajectory();
+  // Expected end pose: move, rotate, (reciprocate returns), move, rotate, all in the
+  // world frame about the object reference point.
+  Pose<double, 3> p = start_pose_3d();
+  p.position += 0.005 * V3::UnitX();
+  p.rotation = inhand::so3_exp<double>(0.3 * V3(1, 2, 3).normalized()) * p.rotation;
+  p.position += -0.004 * V3(0, 1, -1).normalized();
+  p.rotation = inhand::so3_exp<double>(-0.2 * V3::UnitX()) * p.rotation;
+  const auto end = tr.evaluate(tr.duration() + 0.1);
+  EXPECT_LT((end.pose.position - p.position).norm(), 1e-15);
+  EXPECT_LT(rotation_distance(end.pose.rotation, p.rotation), 1e-14);
+}
+
+TEST(ObjectTrajectory, FeedForwardTwistIsTheDerivativeOfThePose) {
+  const Traj3 tr = mixed_trajectory();
+  auto rng = inhand_test::make_rng(20240601);
+  const double h = 1e-5;
+  const int n = scaled(2000);
+  double worst_lin = 0.0, worst_ang = 0.0, peak = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double t = inhand_test::uniform(rng, 0.0, tr.duration());
+    // Stay h away from boundaries (segments and reciprocation half-cycles): the
+    // central difference would straddle two polynomial pieces there.
+    bool near_boundary = false;
+    for (int i = 0; i <= tr.size(); ++i)
+      if (std::abs(t - tr.segment_start_time(i)) < 2 * h) near_boundary = true;
+    const double rec0 = tr.segment_start_time(3);
+    for (int q = 0; q <= 4; ++q)
+      if (std::abs(t - (rec0 + 0.5 * q)) < 2 * h) near_boundary = true;
+    if (near_boundary) continue;
+    const auto s = tr.evaluate(t);
+    const auto sp = tr.evaluate(t + h);
+    const auto sm = tr.evaluate(t - h);
+    const V3 v_fd = (sp.pose.position - sm.pose.position) / (2 * h);
+    const V3 w_fd =
+        inhand::so3_log<double>(Eigen::Matrix3d(sp.pose.rotation * sm.pose.rotation.transpose())) /
+        (2 * h);
+    worst_lin = std::max(worst_lin, (v_fd - s.twist.head<3>()).norm());
+    worst_ang = std::max(worst_ang, (w_fd - s.twist.tail<3>()).norm());
+    peak = std::max(peak, s.twist.norm());
+  }
+  // Truncation error ~ h^2 |s'''| |D| / 6 with |s'''| <= 60 / T^3 (T >= 0.5 s):
+  // <= 1e-10 * 480 * 0.3 / 6 ~ 3e-9 for the angular part; rounding ~ 1e-16 / h.
+  EXPECT_LT(worst_lin, 1e-9);
+  EXPECT_LT(worst_ang, 1e-8);
+  EXPECT_GT(peak, 0.2);  // the sweep did see motion
+  record("ff_linear_error", worst_lin);
+  record("ff_angular_error", worst_ang);
+}
+
+TEST(ObjectTrajectory, ReciprocateReturnsToStartAndReachesTheDisplacementAtMidCycle) {
+  Twist3 d;
+  d << 0.005, 0, 0, 0, 0, 0;  // the paper's Fig. 3a: 0.5 cm along X
+  Traj3 tr;
+  tr.reset(start_pose_3d());
+  ASSERT_TRUE(tr.append(Seg3::reciprocate(d, 3.0, 3)));  // 3 cycles of 1 s
+  const V3 p0 = start_pose_3d().position;
+  for (int c = 0; c < 3; ++c) {
+    const auto mid = tr.evaluate(c + 0.5);
+    EXPECT_LT((mid.pose.position - (p0 + d.head<3>())).norm(), 1e-15) << "cycle " << c;
+    EXPECT_LT(mid.twist.norm(), 1e-15);
+    const auto beg = tr.evaluate(static_cast<double>(c));
+    EXPECT_LT((beg.pose.position - p0).norm(), 1e-15) << "cycle " << c;
+    EXPECT_LT(beg.twist.norm(), 1e-15);
+    // Going out in the first half, coming back in the second.
+    EXPECT_GT(tr.evaluate(c + 0.25).twist(0), 0.0);
+    EXPECT_LT(tr.evaluate(c + 0.75).twist(0), 0.0);
+    // Never beyond the turning point.
+    for (int k = 0; k < 100; ++k) {
+      const double x = (tr.evaluate(c + k / 100.0).pose.position - p0)(0);
+      EXPECT_GE(x, -1e-18);
+      EXPECT_LE(x, 0.005 + 1e-18);
+    }
+  }
+  const auto end = tr.evaluate(3.5);
+  EXPECT_EQ(end.segment, -1);
+  EXPECT_LT((end.pose.position - p0).norm(), 1e-15);
+  EXPECT_LT(rotation_distance(end.pose.rotation, start_pose_3d().rotation), 1e-15);
+  // The segment after a reciprocation starts from the start pose.
+  ASSERT_TRUE(tr.append(Seg3::move(V3::UnitY(), 0.01, 1.0)));
+  const auto after = tr.evaluate(3.0 + 1.0 + 1e-9);
+  EXPECT_LT((after.pose.position - (p0 + 0.01 * V3::UnitY())).norm(), 1e-15);
+}
+
+TEST(ObjectTrajectory, RotateAboutXByMinusPointTwoReachesThatRollAngle) {
+  // The paper's Fig. 3b: Euler angle alpha (roll about world X) from 0 to -0.2 rad.
+  Traj3 tr;
+  tr.reset(Pose<double, 3>::identity());
+  ASSERT_TRUE(tr.append(Seg3::rotate(V3::UnitX(), -0.2, 2.0)));
+  const V3 rpy_end = inhand::euler_from_rotation<double>(tr.evaluate(5.0).pose.rotation);
+  EXPECT_NEAR(rpy_end(0), -0.2, 1e-15);
+  EXPECT_NEAR(rpy_end(1), 0.0, 1e-15);
+  EXPECT_NEAR(rpy_end(2), 0.0, 1e-15);
+  // In between the roll follows -0.2 s(t / T), pitch and yaw stay zero, and the
+  // angular velocity is about X only.
+  for (int k = 0; k <= 40; ++k) {
+    const double t = 2.0 * k / 40.0;
+    double s, ds;
+    inhand::minimum_jerk(t / 2.0, s, ds);
+    const auto smp = tr.evaluate(t);
+    const V3 rpy = inhand::euler_from_rotation<double>(smp.pose.rotation);
+    EXPECT_NEAR(rpy(0), -0.2 * s, 1e-15) << "t = " << t;
+    EXPECT_NEAR(rpy(1), 0.0, 1e-15);
+    EXPECT_NEAR(rpy(2), 0.0, 1e-15);
+    EXPECT_NEAR(smp.twist(3), -0.2 * ds / 2.0, 1e-15);
+    EXPECT_EQ(smp.twist(4), 0.0);
+    EXPECT_EQ(smp.twist(5), 0.0);
+    EXPECT_TRUE(smp.twist.head<3>().isZero(0.0));
+    EXPECT_TRUE(smp.pose.position.isZero(0.0));
+  }
+  // And back to 0 with a reciprocation of the same displacement.
+  Traj3 back;
+  back.reset(Pose<double, 3>::identity());
+  Twist3 d = Twist3::Zero();
+  d(3) = -0.2;
+  ASSERT_TRUE(back.append(Seg3::reciprocate(d, 4.0)));
+  EXPECT_NEAR(inhand::euler_from_rotation<double>(back.evaluate(2.0).pose.rotation)(0), -0.2,
+              1e-15);
+  EXPECT_NEAR(inhand::euler_from_rotation<double>(back.evaluate(4.0).pose.rotation)(0), 0.0, 1e-15);
+}
+
+TEST(ObjectTrajectory, HoldKeepsThePoseWithZeroTwist) {
+  Traj3 tr;
+  tr.reset(start_pose_3d());
+  ASSERT_TRUE(tr.append(Seg3::move(V3(0, 0, 1), 0.02, 1.0)));
+  ASSERT_TRUE(tr.append(Seg3::hold_for(2.0)));
+  const V3 held = start_pose_3d().position + V3(0, 0, 0.02);
+  for (int k = 0; k <= 50; ++k) {
+    const double t = 1.0 + 2.0 * k / 50.0;
+    const auto s = tr.evaluate(t);
+    if (k < 50) {
+      EXPECT_EQ(s.segment, 1);
+    }
+    EXPECT_TRUE(s.twist.isZero(0.0));
+    EXPECT_LT((s.pose.position - held).norm(), 1e-15);
+    EXPECT_LT(rotation_distance(s.pose.rotation, start_pose_3d().rotation), 1e-15);
+  }
+  EXPECT_EQ(tr.evaluate(3.0).segment, -1);
+  EXPECT_EQ(tr.segment(1).kind, SegmentKind::hold);
+  EXPECT_TRUE(tr.segment(1).displacement.isZero(0.0));
+}
+
+TEST(ObjectTrajectory, PlanarTrajectory) {
+  Pose<double, 2> start;
+  start.position = V2(0.02, -0.01);
+  start.rotation = inhand::so2_exp(0.4);
+  Traj2 tr;
+  tr.reset(start);
+  ASSERT_TRUE(tr.append(Seg2::move(V2(1, 1), 0.01, 1.0)));
+  ASSERT_TRUE(tr.append(Seg2::rotate(inhand::AngularVector<double, 2>(-1.0), 0.3, 1.0)));
+  Twist2 d;
+  d << -0.004, 0.002, 0.15;
+  ASSERT_TRUE(tr.append(Seg2::reciprocate(d, 1.0)));
+  // End of the move, end of the rotation (clockwise: axis -1), mid reciprocation.
+  const auto e1 = tr.evaluate(1.0);
+  EXPECT_LT((e1.pose.position - (start.position + 0.01 * V2(1, 1).normalized())).norm(), 1e-15);
+  const auto e2 = tr.evaluate(2.0);
+  EXPECT_NEAR(inhand::so2_log<double>(e2.pose.rotation), 0.4 - 0.3, 1e-15);
+  const auto mid = tr.evaluate(2.5);
+  EXPECT_LT((mid.pose.position - (e1.pose.position + d.head<2>())).norm(), 1e-15);
+  EXPECT_NEAR(inhand::so2_log<double>(mid.pose.rotation), 0.1 + 0.15, 1e-15);
+  const auto end = tr.evaluate(3.0);
+  EXPECT_LT((end.pose.position - e1.pose.position).norm(), 1e-15);
+  EXPECT_NEAR(inhand::so2_log<double>(end.pose.rotation), 0.1, 1e-15);
+  // Feed-forward twist against central differences.
+  const double h = 1e-5;
+  double worst = 0.0;
+  for (int k = 1; k < 300; ++k) {
+    const double t = 3.0 * k / 300.0 + 0.0037;
+    if (std::abs(t - 1.0) < 2 * h || std::abs(t - 2.0) < 2 * h || std::abs(t - 2.5) < 2 * h)
+      continue;
+    const auto s = tr.evaluate(t), sp = tr.evaluate(t + h), sm = tr.evaluate(t - h);
+    Twist2 fd;
+    fd.head<2>() = (sp.pose.position - sm.pose.position) / (2 * h);
+    fd(2) =
+        inhand::so2_log<double>(Eigen::Matrix2d(sp.pose.rotation * sm.pose.rotation.transpose())) /
+        (2 * h);
+    worst = std::max(worst, (fd - s.twist).norm());
+  }
+  EXPECT_LT(worst, 1e-8);
+  record("planar_ff_error", worst);
+}
+
+TEST(ObjectTrajectory, FloatInstantiation) {
+  ObjectTrajectory<float, 3, 4> tr;
+  tr.reset(Pose<float, 3>::identity());
+  ASSERT_TRUE(
+      tr.append(TrajectorySegment<float, 3>::rotate(Eigen::Vector3f::UnitX(), -0.2f, 1.0f)));
+  const auto s = tr.evaluate(2.0f);
+  EXPECT_NEAR(inhand::euler_from_rotation<float>(s.pose.rotation)(0), -0.2f, 1e-6f);
+}
+
+TEST(ObjectTrajectory, CapacityIsRespected) {
+  ObjectTrajectory<double, 3, 4> tr;
+  tr.reset(start_pose_3d());
+  for (int i = 0; i < 4; ++i) EXPECT_TRUE(tr.append(Seg3::move(V3::UnitX(), 0.001, 0.5)));
+  EXPECT_EQ(tr.size(), 4);
+  EXPECT_FALSE(tr.append(Seg3::move(V3::UnitX(), 0.001, 0.5)));
+  EXPECT_EQ(tr.size(), 4);
+  EXPECT_DOUBLE_EQ(tr.duration(), 2.0);
+  const auto end = tr.evaluate(10.0);
+  EXPECT_LT((end.pose.position - (start_pose_3d().position + V3(0.004, 0, 0))).norm(), 1e-15);
+  // reset() empties it.
+  tr.reset(start_pose_3d());
+  EXPECT_EQ(tr.size(), 0);
+  EXPECT_EQ(tr.duration(), 0.0);
+  EXPECT_TRUE(tr.append(Seg3::hold_for(1.0)));
+}
+
+TEST(ObjectTrajectory, InvalidSegmentsAreRefusedAndNamed) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Case {
+    const char* name;
+    Seg3 seg;
+    const char* field;
+  };
+  Twist3 bad = Twist3::Zero();
+  bad(4) = nan;
+  Seg3 zero_cycles = Seg3::reciprocate(Twist3::Ones() * 0.01, 1.0, 0);
+  Seg3 inf_disp = Seg3::reciprocate(Twist3::Ones() * inf, 1.0, 1);
+  const std::vector<Case> cases = {
+      {"zero duration", Seg3::hold_for(0.0), "segment.duration"},
+      {"negative duration", Seg3::move(V3::UnitX(), 0.01, -1.0), "segment.duration"},
+      {"NaN duration", Seg3::rotate(V3::UnitZ(), 0.1, nan), "segment.duration"},
+      {"infinite duration", Seg3::hold_for(inf), "segment.duration"},
+      {"NaN displacement", Seg3::reciprocate(bad, 1.0, 1), "segment.displacement"},
+      {"NaN amount", Seg3::move(V3::UnitX(), nan, 1.0), "segment.displacement"},
+      {"infinite displacement", inf_disp, "segment.displacement"},
+      {"zero cycles", zero_cycles, "segment.cycles"},
+  };
+  for (const Case& c : cases) {
+    Traj3 tr;
+    tr.reset(start_pose_3d());
+    ASSERT_TRUE(tr.append(Seg3::hold_for(1.0)));
+    const inhand::Validation v = Traj3::validate_segment(c.seg);
+    ASSERT_FALSE(v.ok()) << c.name;
+    EXPECT_EQ(std::string(v.field), c.field) << c.name;
+    EXPECT_NE(v.reason, nullptr);
+    EXPECT_FALSE(tr.append(c.seg)) << c.name;
+    EXPECT_EQ(tr.size(), 1) << c.name;
+    EXPECT_EQ(tr.duration(), 1.0) << c.name;
+  }
+  EXPECT_TRUE(Traj3::validate_segment(Seg3::reciprocate(Twist3::Ones() * 0.01, 1.0, 1)).ok());
+}
+
+TEST(ObjectTrajectory, NaNTimeHoldsTheStartPoseWithFiniteOutput) {
+  const Traj3 tr = mixed_trajectory();
+  for (double t :
+       {std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::infinity()}) {
+    const auto s = tr.evaluate(t);
+    EXPECT_TRUE(s.pose.is_finite());
+    EXPECT_TRUE(inhand::all_finite(s.twist));
+    EXPECT_TRUE(s.twist.isZero(0.0));
+    EXPECT_TRUE(s.pose.position == start_pose_3d().position);
+    EXPECT_TRUE(s.pose.rotation == start_pose_3d().rotation);
+  }
+  // +inf is "after the end": the final pose, zero twist.
+  const auto s = tr.evaluate(std::numeric_limits<double>::infinity());
+  EXPECT_EQ(s.segment, -1);
+  EXPECT_TRUE(s.twist.isZero(0.0));
+  EXPECT_TRUE(s.pose.is_finite());
+}
+
+}  // namespace
