@@ -111,6 +111,8 @@ enum class ControllerWarning : unsigned {
   long_tick = 1u << 5,        ///< dt exceeded max_tick: integration used max_tick
   no_balancing_contact = 1u << 6,  ///< no balancing finger touching: forces unbalanced
   rate_limited = 1u << 7,     ///< some finger's command change was scaled to max_joint_acceleration
+  pose_outlier = 1u << 8,     ///< the measured object pose jumped implausibly: previous one held
+  force_outlier = 1u << 9,    ///< a measured normal force jumped implausibly: previous one held
 };
 constexpr ControllerWarning operator|(ControllerWarning a, ControllerWarning b) noexcept {
   return static_cast<ControllerWarning>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
@@ -149,6 +151,32 @@ struct PoseFeedback {
       return Validation::invalid("pose_feedback.max_linear_speed", "must be > 0");
     if (!(max_angular_speed > Scalar(0)))
       return Validation::invalid("pose_feedback.max_angular_speed", "must be > 0");
+    return Validation::valid();
+  }
+};
+
+/// Plausibility gates on the sensed data (sensor faults: a vision outlier, a force
+/// spike). A sample whose change since the last ACCEPTED one exceeds what the bound
+/// allows over the elapsed time is rejected: the last accepted value is used instead
+/// and the warning pose_outlier / force_outlier is raised. After
+/// `max_consecutive_rejections` rejections in a row the sample is accepted anyway, so
+/// a real jump (the object was knocked) is followed after that many ticks. Contacts
+/// that (re)start touching are always accepted. +infinity (the default) disables a gate.
+template <typename Scalar>
+struct OutlierGates {
+  Scalar max_object_speed = std::numeric_limits<Scalar>::infinity();          ///< m/s
+  Scalar max_object_angular_speed = std::numeric_limits<Scalar>::infinity();  ///< rad/s
+  Scalar max_force_rate = std::numeric_limits<Scalar>::infinity();            ///< N/s
+  int max_consecutive_rejections = 5;
+  Validation validate() const noexcept {
+    if (!(max_object_speed > Scalar(0)) || max_object_speed != max_object_speed)
+      return Validation::invalid("outlier_gates.max_object_speed", "must be > 0 (+inf disables)");
+    if (!(max_object_angular_speed > Scalar(0)) || max_object_angular_speed != max_object_angular_speed)
+      return Validation::invalid("outlier_gates.max_object_angular_speed", "must be > 0 (+inf disables)");
+    if (!(max_force_rate > Scalar(0)) || max_force_rate != max_force_rate)
+      return Validation::invalid("outlier_gates.max_force_rate", "must be > 0 (+inf disables)");
+    if (max_consecutive_rejections < 0)
+      return Validation::invalid("outlier_gates.max_consecutive_rejections", "must be >= 0");
     return Validation::valid();
   }
 };
@@ -207,6 +235,7 @@ class ReactiveController {
     IkParams<Scalar> ik{};
     ForcePlannerParams<Scalar> force_planner{};
     GraspParams<Scalar> grasp{};
+    OutlierGates<Scalar> outlier_gates{};
   };
 
   /// Tactile contact of one finger (world frame).
@@ -281,6 +310,7 @@ class ReactiveController {
     if (!(v = c.ik.validate()).ok()) return Validation::invalid("ik.damping", v.reason);
     if (!(v = c.force_planner.validate()).ok()) return v;
     if (!(v = c.grasp.validate()).ok()) return v;
+    if (!(v = c.outlier_gates.validate()).ok()) return v;
     bool any_balancing = false;
     for (int i = 0; i < n; ++i) {
       const FingerConfig& f = c.fingers[static_cast<std::size_t>(i)];
@@ -331,12 +361,16 @@ class ReactiveController {
     settled_time_ = Scalar(0);
     manipulation_time_ = Scalar(0);
     pose_error_integral_.setZero();
+    pose_rejections_ = 0;
+    pose_age_ = Scalar(0);
     planner_.reset();
     for (Slot& s : slots_) {
       s.servo.reset();
       s.state = FingerState::idle;
       s.had_contact = false;
       s.qdot.setZero();
+      s.force_valid = false;
+      s.force_rejections = 0;
     }
   }
 
@@ -428,6 +462,7 @@ class ReactiveController {
       out.warnings = out.warnings | ControllerWarning::long_tick;
     }
     last_time_ = in.time;
+    gate_inputs(in, dt, out.warnings);
     has_time_ = true;
 
     if (phase_ == Phase::idle) {
@@ -454,6 +489,10 @@ class ReactiveController {
     GraspTarget<Scalar, Dim> target{};
     FingerState state = FingerState::idle;
     bool had_contact = false;
+    Scalar force_used = Scalar(0);  ///< measured normal force after the gate, N
+    bool force_valid = false;
+    int force_rejections = 0;
+    Scalar force_age = Scalar(0);
     Vec last_contact_object = Vec::Zero();  ///< last contact point, object frame
     Vec last_normal_object = Vec::UnitX();  ///< last outward normal, object frame
   };
@@ -503,6 +542,51 @@ class ReactiveController {
     out.feedforward_twist.setZero();
   }
 
+  /// Plausibility gates (OutlierGates): sets object_pose_ and each slot's force_used.
+  void gate_inputs(const Input& in, Scalar raw_dt, ControllerWarning& w) noexcept {
+    const OutlierGates<Scalar>& g = config_.outlier_gates;
+    const Scalar elapsed_pose = pose_age_ + raw_dt;
+    bool accept = !has_time_;
+    if (!accept) {
+      const Scalar dp = (in.object_pose.position - object_pose_.position).norm();
+      const Scalar dr = rotation_log<Scalar>(Rotation<Scalar, Dim>(in.object_pose.rotation *
+                                                                   object_pose_.rotation.transpose()))
+                            .norm();
+      accept = dp <= g.max_object_speed * elapsed_pose && dr <= g.max_object_angular_speed * elapsed_pose;
+      if (!accept && pose_rejections_ >= g.max_consecutive_rejections) accept = true;
+    }
+    if (accept) {
+      object_pose_ = in.object_pose;
+      pose_rejections_ = 0;
+      pose_age_ = Scalar(0);
+    } else {
+      ++pose_rejections_;
+      pose_age_ = elapsed_pose;
+      w = w | ControllerWarning::pose_outlier;
+    }
+    for (int i = 0; i < finger_count(); ++i) {
+      Slot& sl = slots_[static_cast<std::size_t>(i)];
+      const TactileContact& c = in.fingers[static_cast<std::size_t>(i)].contact;
+      if (!c.touching) {
+        sl.force_valid = false;
+        continue;
+      }
+      const Scalar elapsed = sl.force_age + raw_dt;
+      bool ok = !sl.force_valid || std::abs(c.normal_force - sl.force_used) <= g.max_force_rate * elapsed ||
+                sl.force_rejections >= g.max_consecutive_rejections;
+      if (ok) {
+        sl.force_used = c.normal_force;
+        sl.force_valid = true;
+        sl.force_rejections = 0;
+        sl.force_age = Scalar(0);
+      } else {
+        ++sl.force_rejections;
+        sl.force_age = elapsed;
+        w = w | ControllerWarning::force_outlier;
+      }
+    }
+  }
+
   /// Kinematics for one finger at the point `p` (contact or virtual contact point).
   void finger_jacobian(int i, const FingerInput& f, const Vec& p) noexcept {
     Slot& s = slots_[static_cast<std::size_t>(i)];
@@ -534,7 +618,7 @@ class ReactiveController {
     Slot& s = slots_[static_cast<std::size_t>(i)];
     fo.desired_contact_velocity = v_desired;
     fo.desired_normal_force = force_active ? f_desired : Scalar(0);
-    fo.servo_status = s.servo.update(v_desired, f_desired, f.contact.normal_force, f.contact.normal,
+    fo.servo_status = s.servo.update(v_desired, f_desired, s.force_used, f.contact.normal,
                                      force_active, dt, fo.servo);
     if (fo.servo_status != ServoStatus::ok) w = w | ControllerWarning::servo_saturated;
     fo.ik = s.ik.solve(s.jacobian, fo.servo.total, s.max_velocity, fo.joint_velocities);
@@ -581,7 +665,7 @@ class ReactiveController {
       if (f.contact.touching) {
         if (s.state == FingerState::approaching) s.servo.reset_force();
         s.state = FingerState::pressing;
-        remember_contact(s, f.contact, in.object_pose);
+        remember_contact(s, f.contact, object_pose_);
         // Tangential pull of the recorded contact point towards the target.
         const Vec d = s.target.contact_point - f.contact.contact_point;
         const Vec d_tangential = d - d.dot(f.contact.normal) * f.contact.normal;
@@ -595,7 +679,7 @@ class ReactiveController {
         servo_and_ik(i, v, f0, f, true, dt, fo, w);
         const bool aligned = cos_angle > Scalar(0) && misalignment.norm() <= std::sin(g.alignment_tolerance);
         all_pressing = all_pressing &&
-                       std::abs(f.contact.normal_force - f0) <= g.force_tolerance * f0 &&
+                       std::abs(s.force_used - f0) <= g.force_tolerance * f0 &&
                        d_tangential.norm() <= g.position_tolerance && aligned;
       } else {
         if (s.state == FingerState::pressing) s.servo.reset_force();
@@ -608,7 +692,7 @@ class ReactiveController {
       }
     }
     out.warnings = w;
-    out.desired_object_pose = in.object_pose;
+    out.desired_object_pose = object_pose_;
     out.commanded_twist.setZero();
     out.feedforward_twist.setZero();
     out.pose_error.setZero();
@@ -627,7 +711,7 @@ class ReactiveController {
     out.feedforward_twist = sample.twist;
     out.segment = sample.segment;
     out.manipulation_time = manipulation_time_;
-    out.pose_error = pose_error(sample.pose, in.object_pose);
+    out.pose_error = pose_error(sample.pose, object_pose_);
     constexpr int R = SpatialDim<Dim>::kRot;
     const PoseFeedback<Scalar>& pf = config_.pose_feedback;
     // Integral of the pose error, each part limited in norm (direction kept).
@@ -674,8 +758,8 @@ class ReactiveController {
       if (f.contact.touching) {
         if (s.state == FingerState::reacquiring) s.servo.reset_force();
         s.state = FingerState::in_contact;
-        remember_contact(s, f.contact, in.object_pose);
-        const Vec v = contact_point_velocity<Scalar, Dim>(V, f.contact.contact_point, in.object_pose.position);
+        remember_contact(s, f.contact, object_pose_);
+        const Vec v = contact_point_velocity<Scalar, Dim>(V, f.contact.contact_point, object_pose_.position);
         finger_jacobian(i, f, f.contact.contact_point);
         servo_and_ik(i, v, desired_forces_(i), f, true, dt, fo, w);
       } else {
@@ -684,11 +768,11 @@ class ReactiveController {
         s.state = FingerState::reacquiring;
         // Aim at the last contact point carried with the measured object, along the
         // last normal; add the object's motion there (eq. 2) so the finger keeps up.
-        const Vec n = in.object_pose.rotation * s.last_normal_object;
-        const Vec p_t = in.object_pose.transform_point(s.last_contact_object);
+        const Vec n = object_pose_.rotation * s.last_normal_object;
+        const Vec p_t = object_pose_.transform_point(s.last_contact_object);
         const Vec p_v = virtual_point(i, f, n);
         const Vec v = approach_velocity(config_.grasp, p_v, p_t, n) +
-                      contact_point_velocity<Scalar, Dim>(V, p_t, in.object_pose.position);
+                      contact_point_velocity<Scalar, Dim>(V, p_t, object_pose_.position);
         finger_jacobian(i, f, p_v);
         servo_and_ik(i, v, Scalar(0), f, false, dt, fo, w);
       }
@@ -711,6 +795,9 @@ class ReactiveController {
   Scalar settled_time_ = Scalar(0);
   Scalar manipulation_time_ = Scalar(0);
   TwistT pose_error_integral_ = TwistT::Zero();
+  PoseT object_pose_{};  ///< measured object pose after the gate
+  int pose_rejections_ = 0;
+  Scalar pose_age_ = Scalar(0);
 };
 
 }  // namespace inhand
