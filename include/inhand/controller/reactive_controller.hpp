@@ -29,6 +29,7 @@
 // 5-joint thumb and 4-joint fingers: Dof = Dynamic, MaxDof = 5): still no allocation.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -476,6 +477,13 @@ class ReactiveController {
   /// Tick-to-tick bound on the change of a finger's joint-velocity command is not
   /// imposed here; the servo PIs low-pass the command (paper, section IV-B).
   const Trajectory& trajectory() const noexcept { return trajectory_; }
+
+  /// Largest |integral| of any finger's force PI (N s): for monitoring windup.
+  Scalar max_force_integral() const noexcept {
+    Scalar m = Scalar(0);
+    for (const Slot& s : slots_) m = std::max(m, std::abs(s.servo.force_pi().integral()(0)));
+    return m;
+  }
 
  private:
 

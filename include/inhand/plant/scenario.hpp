@@ -45,6 +45,51 @@ struct StageSpec {
   double settle = 0.5;   ///< manipulate: hold time after the last segment [s]
 };
 
+/// A fault injected into a run (method robustness: sensing faults and disturbances).
+/// Times are relative to the start of the named stage.
+///   tactile_dropout : finger's tactile signal reads "not touching" for `duration`
+///   force_spike     : finger's measured normal force += `magnitude` N for `duration`
+///   pose_outlier    : measured object position += `vector` (m) for `duration`
+///   knock           : external force `vector` (N, world) on the object for `duration`
+///   finger_away     : finger's command replaced by a motion back to its open posture
+///                     (the object should drop: the negative test)
+struct FaultSpec {
+  enum class Kind { tactile_dropout, force_spike, pose_outlier, knock, finger_away };
+  Kind kind = Kind::tactile_dropout;
+  std::string stage = "manipulate";
+  double at = 0.5;        ///< s into the stage
+  double duration = 0.05; ///< s
+  int finger = 0;
+  double magnitude = 0.0;
+  Eigen::Vector3d vector = Eigen::Vector3d::Zero();
+};
+inline const char* to_string(FaultSpec::Kind k) noexcept {
+  switch (k) {
+    case FaultSpec::Kind::tactile_dropout: return "tactile_dropout";
+    case FaultSpec::Kind::force_spike: return "force_spike";
+    case FaultSpec::Kind::pose_outlier: return "pose_outlier";
+    case FaultSpec::Kind::knock: return "knock";
+    case FaultSpec::Kind::finger_away: return "finger_away";
+  }
+  return "unknown";
+}
+
+/// What the controller made of an injected fault.
+struct FaultReport {
+  FaultSpec::Kind kind = FaultSpec::Kind::tactile_dropout;
+  int finger = 0;
+  double start_time = 0.0;  ///< s, scenario time
+  /// Ticks from the fault's start until the controller reported it: the finger in
+  /// `reacquiring` (dropout, knock, finger away: any finger), or the pose_outlier /
+  /// force_outlier warning. -1: never reported.
+  long detection_ticks = -1;
+  /// Dropout/knock: ticks after the fault window until every finger was in contact
+  /// again (-1: not within the run).
+  long reacquire_ticks = -1;
+  /// Largest |force integral| of any finger's servo seen from the start of the fault (N s).
+  double max_force_integral = 0.0;
+};
+
 struct ScenarioSpec {
   std::string name = "scenario";
   HandPreset hand = shadow_like_hand();
@@ -52,6 +97,7 @@ struct ScenarioSpec {
   PlantParams plant = default_plant_params();
   HandController::Config controller{};  ///< fingers are filled from `hand`
   std::vector<StageSpec> stages;
+  std::vector<FaultSpec> faults;
   MetricsTolerances tolerances{};
 };
 
@@ -60,6 +106,7 @@ struct ScenarioResult {
   bool dropped = false;
   int contact_losses = 0;  ///< after the grasp stage
   std::string failure;     ///< empty on success; otherwise why the run stopped early
+  std::vector<FaultReport> faults;
 };
 
 /// One control tick as seen by a trace writer.
@@ -136,6 +183,20 @@ class ScenarioRunner {
     bool grasp_done = false;
     double t = 0.0;
     StageMetricsAccumulator acc;
+    struct FaultTracking {
+      long start_tick = -1, end_tick = -1;
+      bool window_over = false, away = false;
+    };
+    std::vector<FaultTracking> fault_state(spec.faults.size());
+    result.faults.resize(spec.faults.size());
+    for (std::size_t fi = 0; fi < spec.faults.size(); ++fi) {
+      const FaultSpec& fs = spec.faults[fi];
+      if (fs.finger < 0 || fs.finger >= n) throw std::invalid_argument("fault: finger index out of range");
+      if (!(fs.duration >= 0.0) || !(fs.at >= 0.0)) throw std::invalid_argument("fault: negative time");
+      result.faults[fi].kind = fs.kind;
+      result.faults[fi].finger = fs.finger;
+    }
+    long global_tick = 0;
     for (std::size_t si = 0; si < spec.stages.size(); ++si) {
       const StageSpec& st = spec.stages[si];
       acc.begin(st.name, st.kind, t, truth, spec.tolerances, grasp_done);
@@ -183,9 +244,69 @@ class ScenarioRunner {
             fi.contact.normal_force = r.normal_force;
           }
         }
+        // Injected faults: sensing corruption before the controller sees the data,
+        // disturbances and overridden commands after.
+        const double ts = t - stage_start;  // stage time at the start of this tick
+        Eigen::Vector3d knock_force = Eigen::Vector3d::Zero();
+        for (std::size_t fi = 0; fi < spec.faults.size(); ++fi) {
+          const FaultSpec& fs = spec.faults[fi];
+          if (fs.stage != st.name || ts + 1e-12 < fs.at || ts >= fs.at + fs.duration) continue;
+          auto& finger_in = in.fingers[static_cast<std::size_t>(fs.finger)];
+          switch (fs.kind) {
+            case FaultSpec::Kind::tactile_dropout: finger_in.contact.touching = false; break;
+            case FaultSpec::Kind::force_spike:
+              if (finger_in.contact.touching) finger_in.contact.normal_force += fs.magnitude;
+              break;
+            case FaultSpec::Kind::pose_outlier: in.object_pose.position += fs.vector; break;
+            case FaultSpec::Kind::knock: knock_force += fs.vector; break;
+            case FaultSpec::Kind::finger_away: break;
+          }
+          if (fault_state[fi].start_tick < 0) {
+            fault_state[fi].start_tick = global_tick;
+            result.faults[fi].start_time = t;
+          }
+        }
+        plant.set_external_wrench(knock_force, Eigen::Vector3d::Zero());
         const ControllerStatus status = controller.update(in, out);
         for (int i = 0; i < n; ++i)
           plant.set_joint_velocity_command(i, out.fingers[static_cast<std::size_t>(i)].joint_velocities);
+        for (std::size_t fi = 0; fi < spec.faults.size(); ++fi) {
+          const FaultSpec& fs = spec.faults[fi];
+          FaultTracking& ft = fault_state[fi];
+          FaultReport& fr = result.faults[fi];
+          if (ft.start_tick < 0) continue;
+          const bool active = fs.stage == st.name && ts + 1e-12 >= fs.at && ts < fs.at + fs.duration;
+          if (fs.kind == FaultSpec::Kind::finger_away && (active || fs.duration <= 0.0 || ft.away)) {
+            ft.away = true;  // stays away for the rest of the run
+            const int f = fs.finger;
+            PlantFinger::JointVector qd = 5.0 * (spec.hand.open_configuration[static_cast<std::size_t>(f)] -
+                                                 plant.joint_positions(f));
+            plant.set_joint_velocity_command(f, qd);
+          }
+          bool reported = false;
+          switch (fs.kind) {
+            case FaultSpec::Kind::pose_outlier:
+              reported = has(out.warnings, ControllerWarning::pose_outlier);
+              break;
+            case FaultSpec::Kind::force_spike:
+              reported = has(out.warnings, ControllerWarning::force_outlier);
+              break;
+            case FaultSpec::Kind::tactile_dropout:
+              reported = out.fingers[static_cast<std::size_t>(fs.finger)].state == FingerState::reacquiring;
+              break;
+            default: reported = status == ControllerStatus::contact_lost; break;
+          }
+          if (reported && fr.detection_ticks < 0) fr.detection_ticks = global_tick - ft.start_tick;
+          if (!active && !ft.window_over) {
+            ft.window_over = true;
+            ft.end_tick = global_tick;
+          }
+          if (ft.window_over && fr.reacquire_ticks < 0 && status == ControllerStatus::ok &&
+              (fs.kind == FaultSpec::Kind::tactile_dropout || fs.kind == FaultSpec::Kind::knock))
+            fr.reacquire_ticks = global_tick - ft.end_tick;
+          fr.max_force_integral = std::max(fr.max_force_integral, controller.max_force_integral());
+        }
+        ++global_tick;
         plant.step(dt);
         t += dt;
 
