@@ -13,7 +13,10 @@
 // object's axis is otherwise ambiguous: p_t - p_c is then parallel to n). The grasp is
 // complete once every finger touches with |f - f_nominal| <= force_tolerance *
 // f_nominal, its contact point lies within `position_tolerance` of p_t in the tangent
-// plane and the angle between n and n_t is below `alignment_tolerance`, for
+// plane and the angle between n and n_t is below `alignment_tolerance` -- or the
+// contact has stalled short of that (over `settle_time` its normal turned by less than
+// a quarter of alignment_tolerance and its point moved by less than a quarter of
+// position_tolerance, as for an off-centre finger on a sphere) -- for
 // `settle_time` seconds (the paper: "the predefined desired contact points and the
 // desired force are approached").
 // During manipulation a finger that loses contact re-approaches along its last

@@ -14,6 +14,7 @@
 // Units: x_dot in m/s, theta_dot in rad/s. noexcept; fixed sizes never allocate.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include "inhand/math/damped_least_squares.hpp"
@@ -159,6 +160,10 @@ class ContactIk {
     }
     if (s < Scalar(1)) {
       theta_dot *= s;
+      // s = limit / |theta_i| is rounded, so the product can exceed the limit by an
+      // ulp; clamp that rounding away so the limits hold exactly.
+      for (int i = 0; i < theta_dot.size(); ++i)
+        theta_dot(i) = std::min(std::max(theta_dot(i), -max_velocity(i)), max_velocity(i));
       report.status = report.status | IkStatus::limited;
     }
     report.limit_scale = s;

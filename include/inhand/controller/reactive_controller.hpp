@@ -416,6 +416,8 @@ class ReactiveController {
       s.target.normal.normalize();
       s.state = FingerState::approaching;
       s.servo.reset();
+      s.align_window_time = Scalar(0);
+      s.align_stalled = false;
     }
     settled_time_ = Scalar(0);
     phase_ = Phase::grasping;
@@ -498,6 +500,10 @@ class ReactiveController {
     FingerState state = FingerState::idle;
     bool had_contact = false;
     Scalar force_used = Scalar(0);  ///< measured normal force after the gate, N
+    Vec align_window_normal = Vec::Zero();
+    Vec align_window_point = Vec::Zero();
+    Scalar align_window_time = Scalar(0);
+    bool align_stalled = false;
     bool force_valid = false;
     int force_rejections = 0;
     Scalar force_age = Scalar(0);
@@ -638,6 +644,9 @@ class ReactiveController {
       const Scalar largest = (fo.joint_velocities - s.qdot).cwiseAbs().maxCoeff();
       if (largest > max_step) {
         fo.joint_velocities = s.qdot + (max_step / largest) * (fo.joint_velocities - s.qdot);
+        // A convex combination of two commands within the joint limits: only rounding
+        // can leave them; clamp it away (this only shrinks the step).
+        fo.joint_velocities = fo.joint_velocities.cwiseMin(s.max_velocity).cwiseMax(-s.max_velocity);
         w = w | ControllerWarning::rate_limited;
       }
     }
@@ -685,10 +694,27 @@ class ReactiveController {
         // centre so that the tangential pull really moves the contact (grasp.hpp).
         finger_jacobian(i, f, fingertip_centre(i, f));
         servo_and_ik(i, v, f0, f, true, dt, fo, w);
-        const bool aligned = cos_angle > Scalar(0) && misalignment.norm() <= std::sin(g.alignment_tolerance);
-        all_pressing = all_pressing &&
-                       std::abs(s.force_used - f0) <= g.force_tolerance * f0 &&
-                       d_tangential.norm() <= g.position_tolerance && aligned;
+        // The contact has settled when it reached its target (position and normal), or
+        // when it stalled: over the last settle window the normal turned by less than a
+        // quarter of alignment_tolerance and the contact point moved by less than a
+        // quarter of position_tolerance (on a sphere, say, an off-centre finger can
+        // reach neither its target point nor the expected normal; the two pulls balance).
+        if (s.align_window_time <= Scalar(0)) {
+          s.align_window_normal = f.contact.normal;
+          s.align_window_point = f.contact.contact_point;
+        }
+        s.align_window_time += dt;
+        if (s.align_window_time >= std::max(g.settle_time, dt)) {
+          s.align_stalled =
+              (f.contact.normal - s.align_window_normal).norm() < Scalar(0.25) * std::sin(g.alignment_tolerance) &&
+              (f.contact.contact_point - s.align_window_point).norm() < Scalar(0.25) * g.position_tolerance;
+          s.align_window_time = Scalar(0);
+        }
+        const bool reached = cos_angle > Scalar(0) &&
+                             misalignment.norm() <= std::sin(g.alignment_tolerance) &&
+                             d_tangential.norm() <= g.position_tolerance;
+        all_pressing = all_pressing && std::abs(s.force_used - f0) <= g.force_tolerance * f0 &&
+                       (reached || s.align_stalled);
       } else {
         if (s.state == FingerState::pressing) s.servo.reset_force();
         s.state = FingerState::approaching;
