@@ -34,7 +34,8 @@ class AtomicFile {
     std::vector<char> buf(templ.begin(), templ.end());
     buf.push_back('\0');
     const int fd = ::mkstemp(buf.data());
-    if (fd < 0) throw std::runtime_error(path_ + ": cannot create a temporary file: " + std::strerror(errno));
+    if (fd < 0)
+      throw std::runtime_error(path_ + ": cannot create a temporary file: " + std::strerror(errno));
     temp_.assign(buf.data());
     // mkstemp creates the file 0600; outputs get the usual 0666 & ~umask.
     const mode_t mask = ::umask(0);

@@ -64,7 +64,8 @@ inline Expectations parse_expectations(const Json& j, const std::string& path,
         std::find(stage_names.begin(), stage_names.end(), name) == stage_names.end()) {
       std::string known;
       for (const std::string& s : stage_names) known += (known.empty() ? "" : ", ") + s;
-      throw JsonError(top.key_path(name), "no stage of this name (stages: " + known + ", or \"all\")");
+      throw JsonError(top.key_path(name),
+                      "no stage of this name (stages: " + known + ", or \"all\")");
     }
     ObjectReader r = top.object(name);
     StageExpectation s;
@@ -78,7 +79,8 @@ inline Expectations parse_expectations(const Json& j, const std::string& path,
     s.max_final_orientation_error = r.optional_number("max_final_orientation_error", ang);
     s.max_peak_orientation_error = r.optional_number("max_peak_orientation_error", ang);
     s.max_settle_time = r.optional_number("max_settle_time", Range::non_negative_up_to(3600.0));
-    s.max_relative_force_error = r.optional_number("max_relative_force_error", Range::non_negative_up_to(1e3));
+    s.max_relative_force_error =
+        r.optional_number("max_relative_force_error", Range::non_negative_up_to(1e3));
     s.max_slip = r.optional_number("max_slip", len);
     if (r.has("max_contact_losses"))
       s.max_contact_losses = r.integer("max_contact_losses", 0, 0, 1000000);
@@ -105,29 +107,37 @@ inline std::string fmt(double x) {
 inline void check_max(std::vector<std::string>& out, const std::string& stage, const char* what,
                       double value, const std::optional<double>& bound, const char* unit) {
   if (bound && !(value <= *bound))
-    out.push_back("stage '" + stage + "': " + what + " = " + fmt(value) + unit + " exceeds " + fmt(*bound) + unit);
+    out.push_back("stage '" + stage + "': " + what + " = " + fmt(value) + unit + " exceeds " +
+                  fmt(*bound) + unit);
 }
-inline void check_stage(std::vector<std::string>& out, const StageExpectation& e, const plant::StageMetrics& m) {
+inline void check_stage(std::vector<std::string>& out, const StageExpectation& e,
+                        const plant::StageMetrics& m) {
   const std::string& n = m.name;
   check_max(out, n, "rms_position_error", m.rms_position_error, e.max_rms_position_error, " m");
-  check_max(out, n, "final_position_error", m.final_position_error, e.max_final_position_error, " m");
+  check_max(out, n, "final_position_error", m.final_position_error, e.max_final_position_error,
+            " m");
   check_max(out, n, "max_position_error", m.max_position_error, e.max_peak_position_error, " m");
-  check_max(out, n, "rms_orientation_error", m.rms_orientation_error, e.max_rms_orientation_error, " rad");
-  check_max(out, n, "final_orientation_error", m.final_orientation_error, e.max_final_orientation_error,
+  check_max(out, n, "rms_orientation_error", m.rms_orientation_error, e.max_rms_orientation_error,
             " rad");
-  check_max(out, n, "max_orientation_error", m.max_orientation_error, e.max_peak_orientation_error, " rad");
+  check_max(out, n, "final_orientation_error", m.final_orientation_error,
+            e.max_final_orientation_error, " rad");
+  check_max(out, n, "max_orientation_error", m.max_orientation_error, e.max_peak_orientation_error,
+            " rad");
   check_max(out, n, "settle_time", m.settle_time, e.max_settle_time, " s");
-  check_max(out, n, "max_relative_force_error", m.max_relative_force_error, e.max_relative_force_error, "");
+  check_max(out, n, "max_relative_force_error", m.max_relative_force_error,
+            e.max_relative_force_error, "");
   double slip = 0.0;
   for (const auto& f : m.fingers) slip = std::max(slip, f.slip_distance);
   check_max(out, n, "slip", slip, e.max_slip, " m");
   if (e.max_contact_losses && m.contact_losses > *e.max_contact_losses)
-    out.push_back("stage '" + n + "': contact_losses = " + std::to_string(m.contact_losses) + " exceeds " +
-                  std::to_string(*e.max_contact_losses));
-  if (e.must_not_drop.value_or(false) && m.dropped) out.push_back("stage '" + n + "': the object was dropped");
+    out.push_back("stage '" + n + "': contact_losses = " + std::to_string(m.contact_losses) +
+                  " exceeds " + std::to_string(*e.max_contact_losses));
+  if (e.must_not_drop.value_or(false) && m.dropped)
+    out.push_back("stage '" + n + "': the object was dropped");
   if (e.must_drop.value_or(false) && !m.dropped)
     out.push_back("stage '" + n + "': the object was expected to drop but did not");
-  if (e.must_complete.value_or(false) && !m.completed) out.push_back("stage '" + n + "': did not complete");
+  if (e.must_complete.value_or(false) && !m.completed)
+    out.push_back("stage '" + n + "': did not complete");
 }
 }  // namespace detail
 

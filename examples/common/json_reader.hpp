@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -24,8 +25,6 @@
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace inhand::examples {
 
@@ -35,7 +34,9 @@ using Json = nlohmann::json;
 class JsonError : public std::runtime_error {
  public:
   JsonError(const std::string& path, const std::string& reason)
-      : std::runtime_error(path.empty() ? reason : path + ": " + reason), path_(path), reason_(reason) {}
+      : std::runtime_error(path.empty() ? reason : path + ": " + reason),
+        path_(path),
+        reason_(reason) {}
   const std::string& path() const noexcept { return path_; }
   const std::string& reason() const noexcept { return reason_; }
 
@@ -146,7 +147,10 @@ inline Json parse_json_text(const std::string& text) {
   detail::ParsePathTracker tracker;
   try {
     return Json::parse(
-        text, [&tracker](int, Json::parse_event_t e, Json& parsed) { return tracker.on_event(e, parsed); },
+        text,
+        [&tracker](int, Json::parse_event_t e, Json& parsed) {
+          return tracker.on_event(e, parsed);
+        },
         /*allow_exceptions=*/true, /*ignore_comments=*/true);
   } catch (const JsonError&) {
     throw;
@@ -177,11 +181,15 @@ inline std::string json_type_name(const Json& j) {
 class ObjectReader {
  public:
   ObjectReader(const Json& j, std::string path) : j_(&j), path_(std::move(path)) {
-    if (!j.is_object()) throw JsonError(path_.empty() ? "(document)" : path_, "must be an object, got " + json_type_name(j));
+    if (!j.is_object())
+      throw JsonError(path_.empty() ? "(document)" : path_,
+                      "must be an object, got " + json_type_name(j));
   }
 
   const std::string& path() const noexcept { return path_; }
-  std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  std::string key_path(const std::string& key) const {
+    return path_.empty() ? key : path_ + "." + key;
+  }
   bool has(const std::string& key) const { return j_->contains(key); }
   /// The raw value (marks the key as read); nullptr when absent.
   const Json* raw(const std::string& key) {
@@ -211,7 +219,8 @@ class ObjectReader {
   bool boolean(const std::string& key, bool fallback) {
     const Json* v = raw(key);
     if (v == nullptr) return fallback;
-    if (!v->is_boolean()) throw JsonError(key_path(key), "must be true or false, got " + json_type_name(*v));
+    if (!v->is_boolean())
+      throw JsonError(key_path(key), "must be true or false, got " + json_type_name(*v));
     return v->get<bool>();
   }
   std::optional<bool> optional_boolean(const std::string& key) {
@@ -229,12 +238,14 @@ class ObjectReader {
   std::string string(const std::string& key, const std::string& fallback) {
     const Json* v = raw(key);
     if (v == nullptr) return fallback;
-    if (!v->is_string()) throw JsonError(key_path(key), "must be a string, got " + json_type_name(*v));
+    if (!v->is_string())
+      throw JsonError(key_path(key), "must be a string, got " + json_type_name(*v));
     return v->get<std::string>();
   }
   std::string required_string(const std::string& key) {
     const Json& v = required(key);
-    if (!v.is_string()) throw JsonError(key_path(key), "must be a string, got " + json_type_name(v));
+    if (!v.is_string())
+      throw JsonError(key_path(key), "must be a string, got " + json_type_name(v));
     return v.get<std::string>();
   }
   /// One of `choices`.
@@ -254,9 +265,11 @@ class ObjectReader {
     if (v == nullptr) return fallback;
     const std::string p = key_path(key);
     if (!v->is_array() || v->size() != n)
-      throw JsonError(p, "must be an array of " + std::to_string(n) + " numbers, got " + json_type_name(*v));
+      throw JsonError(
+          p, "must be an array of " + std::to_string(n) + " numbers, got " + json_type_name(*v));
     std::vector<double> out;
-    for (std::size_t i = 0; i < n; ++i) out.push_back(as_number((*v)[i], p + "[" + std::to_string(i) + "]", r));
+    for (std::size_t i = 0; i < n; ++i)
+      out.push_back(as_number((*v)[i], p + "[" + std::to_string(i) + "]", r));
     return out;
   }
   /// A nested object (absent: an empty object, so its defaults apply).
@@ -271,7 +284,8 @@ class ObjectReader {
     if (is_required) required(key);
     const Json* v = raw(key);
     if (v == nullptr) return empty;
-    if (!v->is_array()) throw JsonError(key_path(key), "must be an array, got " + json_type_name(*v));
+    if (!v->is_array())
+      throw JsonError(key_path(key), "must be an array, got " + json_type_name(*v));
     return *v;
   }
 
@@ -297,14 +311,16 @@ class ObjectReader {
     const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
     if (v.is_number_unsigned()) {
       const auto u = v.get<unsigned long long>();
-      if (u > static_cast<unsigned long long>(hi) || (lo > 0 && u < static_cast<unsigned long long>(lo)))
+      if (u > static_cast<unsigned long long>(hi) ||
+          (lo > 0 && u < static_cast<unsigned long long>(lo)))
         throw JsonError(path, "must be an integer in " + range + ", got " + v.dump());
       return static_cast<long long>(u);
     }
     if (!v.is_number_integer())
       throw JsonError(path, "must be an integer in " + range + ", got " + json_type_name(v));
     const auto x = v.get<long long>();
-    if (x < lo || x > hi) throw JsonError(path, "must be an integer in " + range + ", got " + v.dump());
+    if (x < lo || x > hi)
+      throw JsonError(path, "must be an integer in " + range + ", got " + v.dump());
     return x;
   }
 

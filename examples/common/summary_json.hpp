@@ -123,8 +123,9 @@ inline RunSummary summary_from_json(const Json& j, const std::string& path = "")
       plant::StageMetrics m;
       m.name = s.at("name").get<std::string>();
       const std::string kind = s.at("kind").get<std::string>();
-      m.kind = kind == "grasp" ? plant::StageKind::grasp
-                               : (kind == "manipulate" ? plant::StageKind::manipulate : plant::StageKind::hold);
+      m.kind = kind == "grasp"
+                   ? plant::StageKind::grasp
+                   : (kind == "manipulate" ? plant::StageKind::manipulate : plant::StageKind::hold);
       m.start_time = s.at("start_time").get<double>();
       m.end_time = s.at("end_time").get<double>();
       m.rms_position_error = s.at("rms_position_error").get<double>();

@@ -64,7 +64,8 @@ struct TraceRow {
 /// Fills `fingers` from a ReactiveController's input (the tactile data it used) and
 /// output (plan, servo parts, states).
 template <int Dim, typename Input, typename Output>
-void fill_trace_fingers(const Input& in, const Output& out, std::vector<TraceFinger<Dim>>& fingers) {
+void fill_trace_fingers(const Input& in, const Output& out,
+                        std::vector<TraceFinger<Dim>>& fingers) {
   fingers.resize(in.fingers.size());
   for (std::size_t i = 0; i < fingers.size(); ++i) {
     TraceFinger<Dim>& f = fingers[i];
@@ -84,7 +85,8 @@ void fill_trace_fingers(const Input& in, const Output& out, std::vector<TraceFin
 inline std::string csv_safe_name(const std::string& s) {
   std::string out = s.empty() ? std::string("finger") : s;
   for (char& c : out) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
     if (!ok) c = '_';
   }
   return out;
@@ -94,8 +96,9 @@ template <int Dim>
 class TraceCsvWriter {
  public:
   /// Opens the (temporary) output and writes the header.
-  TraceCsvWriter(const std::string& path, const std::vector<std::string>& finger_names,
-                 const Rotation<double, Dim>& reference_rotation = Rotation<double, Dim>::Identity())
+  TraceCsvWriter(
+      const std::string& path, const std::vector<std::string>& finger_names,
+      const Rotation<double, Dim>& reference_rotation = Rotation<double, Dim>::Identity())
       : file_(path), fingers_(finger_names.size()), reference_(reference_rotation) {
     std::string h = "time,stage,stage_name";
     const char* pose_cols3[] = {"x", "y", "z", "roll", "pitch", "yaw"};
@@ -123,7 +126,8 @@ class TraceCsvWriter {
 
   /// Appends one row; row.fingers must have one entry per finger name.
   void write(const TraceRow<Dim>& row) {
-    if (row.fingers.size() != fingers_) throw std::invalid_argument("trace row: wrong finger count");
+    if (row.fingers.size() != fingers_)
+      throw std::invalid_argument("trace row: wrong finger count");
     std::FILE* f = file_.stream();
     std::fprintf(f, "%.6f,%d,%s", row.time, row.stage, csv_safe_name(row.stage_name).c_str());
     pose(f, row.desired);
@@ -131,8 +135,10 @@ class TraceCsvWriter {
     pose(f, row.actual);
     for (const TraceFinger<Dim>& t : row.fingers) {
       std::fprintf(f, ",%d", t.touching ? 1 : 0);
-      if (t.touching) vec(f, t.contact_point);
-      else for (int k = 0; k < Dim; ++k) std::fputs(",nan", f);
+      if (t.touching)
+        vec(f, t.contact_point);
+      else
+        for (int k = 0; k < Dim; ++k) std::fputs(",nan", f);
       num(f, t.desired_force);
       num(f, t.measured_force);
       vec(f, t.servo.motion);
@@ -159,8 +165,10 @@ class TraceCsvWriter {
     }
   }
   static void num(std::FILE* f, double x) {
-    if (std::abs(x) < 1e-15) std::fputs(",0", f);
-    else std::fprintf(f, ",%.8g", x);
+    if (std::abs(x) < 1e-15)
+      std::fputs(",0", f);
+    else
+      std::fprintf(f, ",%.8g", x);
   }
   template <typename V>
   static void vec(std::FILE* f, const V& v) {

@@ -1,0 +1,342 @@
+// inhand_scenario: runs one scenario file on the analytic 3-D plant and reports the
+// per-stage metrics; or, with --table, tabulates the summaries of earlier runs.
+//
+//   inhand_scenario <scenario.json> [--out DIR] [--trace FILE.csv] [--summary FILE.json]
+//                   [--check] [--quiet]
+//   inhand_scenario --table SUMMARY.json... [--check]
+//
+// --out DIR writes DIR/trace.csv and DIR/summary.json (DIR is created); --trace and
+// --summary name the files explicitly (and override --out for that file). Outputs are
+// written atomically, and only after a complete run: a malformed scenario file or a
+// failed run leaves no output behind.
+// Exit status: 0 ok; 1 an expectation was violated (with --table: some summary says
+// FAIL) and --check was given; 2 usage error
+// or malformed / invalid scenario file; 3 I/O or other run-time error.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/expectations.hpp"
+#include "common/summary_json.hpp"
+#include "common/trace_csv.hpp"
+#include "scenario_json.hpp"
+
+namespace {
+
+namespace ex = inhand::examples;
+namespace ip = inhand::plant;
+
+constexpr int kExitViolation = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitRuntime = 3;
+
+double max_finger_slip(const ip::StageMetrics& m) {
+  double s = 0.0;
+  for (const auto& f : m.fingers) s = std::max(s, f.slip_distance);
+  return s;
+}
+
+std::string time_or_never(double t) {
+  if (!std::isfinite(t)) return "never";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", t);
+  return buf;
+}
+
+/// x in at most `width` characters: fixed with `decimals`, or fewer decimals, or %g.
+std::string fit(double x, int width, int decimals) {
+  char buf[48];
+  if (!std::isfinite(x)) return std::isnan(x) ? "nan" : "inf";
+  for (int d = decimals; d >= 0; --d) {
+    std::snprintf(buf, sizeof buf, "%.*f", d, x);
+    if (static_cast<int>(std::strlen(buf)) <= width) return buf;
+  }
+  std::snprintf(buf, sizeof buf, "%.*g", std::max(1, width - 5), x);
+  return buf;
+}
+
+/// One line per stage; lengths in mm, angles in mrad (fits 100 columns).
+void print_stage_table(const ex::RunSummary& r) {
+  std::printf("%-12s %-10s %6s | %-20s | %-20s | %6s %6s %6s %4s %4s %4s\n", "stage", "kind",
+              "t[s]", "position err [mm]", "orient. err [mrad]", "settle", "Ferr%", "slip", "loss",
+              "drop", "done");
+  std::printf("%-12s %-10s %6s | %6s %6s %6s | %6s %6s %6s | %6s %6s %6s %4s %4s %4s\n", "", "", "",
+              "rms", "final", "max", "rms", "final", "max", "[s]", "max", "[mm]", "", "", "");
+  for (const auto& m : r.stages) {
+    std::printf("%-12.12s %-10s %6s | %6s %6s %6s | %6s %6s %6s | %6s %6s %6s %4d %4s %4s\n",
+                m.name.c_str(), ip::to_string(m.kind), fit(m.end_time - m.start_time, 6, 2).c_str(),
+                fit(1e3 * m.rms_position_error, 6, 3).c_str(),
+                fit(1e3 * m.final_position_error, 6, 3).c_str(),
+                fit(1e3 * m.max_position_error, 6, 3).c_str(),
+                fit(1e3 * m.rms_orientation_error, 6, 2).c_str(),
+                fit(1e3 * m.final_orientation_error, 6, 2).c_str(),
+                fit(1e3 * m.max_orientation_error, 6, 2).c_str(),
+                time_or_never(m.settle_time).c_str(),
+                fit(100.0 * m.max_relative_force_error, 6, 1).c_str(),
+                fit(1e3 * max_finger_slip(m), 6, 3).c_str(), m.contact_losses,
+                m.dropped ? "yes" : "no", m.completed ? "yes" : "no");
+  }
+}
+
+/// First stage of a kind, or nullptr.
+const ip::StageMetrics* find_stage(const ex::RunSummary& r, ip::StageKind k) {
+  for (const auto& m : r.stages)
+    if (m.kind == k) return &m;
+  return nullptr;
+}
+
+/// The paper-style table: one row per run summary.
+int print_summary_table(const std::vector<std::string>& files, bool check) {
+  std::printf("%-20s %-14s | %-47s |\n", "", "stage 1 (hold)", "stage 2 (manipulate)");
+  std::printf("%-20s %7s %6s | %7s %7s | %7s %7s | %5s %6s %4s %4s %s\n", "scenario", "settle",
+              "peak", "pos rms", "final", "rot rms", "final", "Ferr", "slip", "loss", "drop",
+              "result");
+  std::printf("%-20s %7s %6s | %7s %7s | %7s %7s | %5s %6s %4s %4s\n", "", "[s]", "[mm]", "[mm]",
+              "[mm]", "[mrad]", "[mrad]", "[%]", "[mm]", "", "");
+  int failed = 0;
+  for (const std::string& file : files) {
+    ex::RunSummary r;
+    try {
+      r = ex::summary_from_json(ex::load_json_file(file), file);
+    } catch (const ex::JsonError& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return kExitBadInput;
+    }
+    const ip::StageMetrics* hold = find_stage(r, ip::StageKind::hold);
+    const ip::StageMetrics* manip = find_stage(r, ip::StageKind::manipulate);
+    // Slip: the largest cumulative slip of one finger after the grasp.
+    std::vector<double> slip(r.finger_names.size(), 0.0);
+    int losses = 0;
+    bool dropped = false;
+    for (const auto& m : r.stages) {
+      losses += m.contact_losses;
+      dropped = dropped || m.dropped;
+      if (m.kind == ip::StageKind::grasp) continue;
+      for (std::size_t i = 0; i < m.fingers.size() && i < slip.size(); ++i)
+        slip[i] += m.fingers[i].slip_distance;
+    }
+    double max_slip = 0.0;
+    for (double s : slip) max_slip = std::max(max_slip, s);
+    auto num = [](const ip::StageMetrics* m, double v, int decimals, int width = 7) {
+      return m == nullptr ? std::string("-") : fit(v, width, decimals);
+    };
+    const std::string result =
+        !r.expectations_checked ? "(no expect)" : (r.passed() ? "PASS" : "FAIL");
+    if (r.expectations_checked && !r.passed()) ++failed;
+    std::printf("%-20.20s %7s %6s | %7s %7s | %7s %7s | %5s %6s %4d %4s %s\n", r.scenario.c_str(),
+                hold ? time_or_never(hold->settle_time).c_str() : "-",
+                num(hold, hold ? 1e3 * hold->max_position_error : 0.0, 3, 6).c_str(),
+                num(manip, manip ? 1e3 * manip->rms_position_error : 0.0, 4).c_str(),
+                num(manip, manip ? 1e3 * manip->final_position_error : 0.0, 4).c_str(),
+                num(manip, manip ? 1e3 * manip->rms_orientation_error : 0.0, 3).c_str(),
+                num(manip, manip ? 1e3 * manip->final_orientation_error : 0.0, 3).c_str(),
+                num(manip, manip ? 100.0 * manip->max_relative_force_error : 0.0, 1, 5).c_str(),
+                fit(1e3 * max_slip, 6, 3).c_str(), losses, dropped ? "yes" : "no", result.c_str());
+  }
+  std::printf(
+      "stage 1 = the first hold stage: settle time and peak position error; stage 2 = the first\n"
+      "manipulate stage: errors of the true pose, Ferr = max |f - f_d| / f_d over fingers and "
+      "ticks;\n"
+      "slip: largest slip of one finger after the grasp; loss: contact losses after the grasp.\n");
+  std::printf("%zu runs, %d failed\n", files.size(), failed);
+  return failed > 0 && check ? kExitViolation : 0;
+}
+
+/// The common summary plus, when faults were injected, what the controller made of them.
+ex::Json summary_document(const ex::RunSummary& summary, const ip::ScenarioResult& result) {
+  ex::Json j = ex::summary_json(summary);
+  if (!result.faults.empty()) {
+    ex::Json faults = ex::Json::array();
+    for (const ip::FaultReport& f : result.faults) {
+      faults.push_back({{"kind", ip::to_string(f.kind)},
+                        {"finger", f.finger},
+                        {"start_time", f.start_time},
+                        {"detection_ticks", f.detection_ticks},
+                        {"reacquire_ticks", f.reacquire_ticks},
+                        {"max_force_integral", f.max_force_integral}});
+    }
+    j["faults"] = faults;
+  }
+  return j;
+}
+
+void print_faults(const ip::ScenarioResult& result) {
+  for (const ip::FaultReport& f : result.faults) {
+    const bool finger_fault =
+        f.kind != ip::FaultSpec::Kind::pose_outlier && f.kind != ip::FaultSpec::Kind::knock;
+    std::printf("fault %-15s ", ip::to_string(f.kind));
+    if (finger_fault) std::printf("finger %d ", f.finger);
+    std::printf("at %.3f s: ", f.start_time);
+    if (f.detection_ticks >= 0)
+      std::printf("reported after %ld tick(s)", f.detection_ticks);
+    else
+      std::printf("never reported");
+    if (f.reacquire_ticks >= 0)
+      std::printf(", all fingers in contact %ld tick(s) after it", f.reacquire_ticks);
+    std::printf(", max |force integral| %.3g N s\n", f.max_force_integral);
+  }
+}
+
+struct Options {
+  std::vector<std::string> files;
+  std::string out_dir, trace, summary;
+  bool check = false, quiet = false, table = false;
+};
+
+int run_scenario(const Options& o) {
+  ex::ScenarioFile sf;
+  try {
+    sf = ex::load_scenario(o.files.front());
+  } catch (const ex::JsonError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBadInput;
+  }
+  const ip::ScenarioSpec& spec = sf.spec;
+
+  std::string trace_path = o.trace, summary_path = o.summary;
+  // A directory this run creates is removed again if the run fails (it is empty then:
+  // the outputs appear only at the end).
+  bool created_out_dir = false;
+  auto remove_created_dir = [&]() {
+    std::error_code ec;
+    if (created_out_dir) std::filesystem::remove(o.out_dir, ec);  // only if empty
+  };
+  try {
+    if (!o.out_dir.empty()) {
+      created_out_dir = std::filesystem::create_directories(o.out_dir);
+      if (trace_path.empty()) trace_path = o.out_dir + "/trace.csv";
+      if (summary_path.empty()) summary_path = o.out_dir + "/summary.json";
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s: %s\n", o.out_dir.c_str(), e.what());
+    return kExitRuntime;
+  }
+
+  ex::RunSummary summary;
+  summary.scenario = spec.name;
+  summary.finger_names = spec.hand.finger_names;
+  summary.expectations_checked = !sf.expect.empty();
+  ip::ScenarioResult result;
+  std::unique_ptr<ex::TraceCsvWriter<3>> trace;
+  const auto wall0 = std::chrono::steady_clock::now();
+  try {
+    if (!trace_path.empty())
+      trace = std::make_unique<ex::TraceCsvWriter<3>>(trace_path, spec.hand.finger_names,
+                                                      spec.object.pose.rotation);
+    ex::TraceRow<3> row;
+    ip::ScenarioRunner::TickObserver observer;
+    if (trace) {
+      observer = [&](const ip::TickRecord& rec) {
+        row.time = rec.time;
+        row.stage = rec.stage;
+        row.stage_name = spec.stages[static_cast<std::size_t>(rec.stage)].name;
+        row.desired = *rec.desired;
+        row.measured = rec.input->object_pose;
+        row.actual = *rec.actual;
+        ex::fill_trace_fingers<3>(*rec.input, *rec.output, row.fingers);
+        trace->write(row);
+      };
+    }
+    result = ip::ScenarioRunner().run(spec, observer);
+  } catch (const std::invalid_argument& e) {
+    trace.reset();
+    remove_created_dir();
+    std::fprintf(stderr, "error: %s: invalid scenario: %s\n", o.files.front().c_str(), e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    trace.reset();
+    remove_created_dir();
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitRuntime;
+  }
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+
+  summary.stages = result.stages;
+  summary.failure = result.failure;
+  summary.violations = ex::check_expectations(sf.expect, result.stages);
+  try {
+    // Both files are complete before either appears.
+    std::unique_ptr<ex::AtomicFile> summary_file;
+    if (!summary_path.empty()) {
+      summary_file = std::make_unique<ex::AtomicFile>(summary_path);
+      summary_file->write(summary_document(summary, result).dump(2) + "\n");
+    }
+    if (trace) trace->commit();
+    if (summary_file) summary_file->commit();
+  } catch (const std::exception& e) {
+    trace.reset();
+    remove_created_dir();
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitRuntime;
+  }
+
+  if (!o.quiet) {
+    std::printf("scenario %s (%s hand, %zu stages): %.1f s simulated in %.2f s\n",
+                spec.name.c_str(), sf.hand_preset.c_str(), spec.stages.size(),
+                result.stages.empty() ? 0.0 : result.stages.back().end_time, wall);
+    if (!sf.description.empty()) std::printf("  %s\n", sf.description.c_str());
+    print_stage_table(summary);
+    print_faults(result);
+    if (!result.failure.empty()) std::printf("run stopped early: %s\n", result.failure.c_str());
+    if (!trace_path.empty()) std::printf("trace:   %s\n", trace_path.c_str());
+    if (!summary_path.empty()) std::printf("summary: %s\n", summary_path.c_str());
+  }
+  const bool violated = !summary.violations.empty();
+  std::fflush(stdout);
+  if (violated && (o.check || !o.quiet)) {
+    std::FILE* to = o.check ? stderr : stdout;
+    std::fprintf(to, "%s: %zu expectation(s) violated:\n", spec.name.c_str(),
+                 summary.violations.size());
+    for (const std::string& v : summary.violations) std::fprintf(to, "  - %s\n", v.c_str());
+  }
+  if (!o.quiet) {
+    if (!summary.expectations_checked)
+      std::printf("no expectations given\n");
+    else
+      std::printf("%s\n", violated ? "FAIL" : "PASS");
+  }
+  return violated && o.check ? kExitViolation : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app{
+      "Runs a scenario file on inhand's analytic 3-D plant and reports per-stage metrics."};
+  app.add_option("files", o.files,
+                 "scenario file (JSON); with --table: run summaries (summary.json) to tabulate")
+      ->required();
+  app.add_option("--out", o.out_dir, "directory for trace.csv and summary.json (created)");
+  app.add_option("--trace", o.trace, "per-tick trace CSV file");
+  app.add_option("--summary", o.summary, "summary JSON file");
+  app.add_flag("--check", o.check, "exit with status 1 when an expectation is violated");
+  app.add_flag("--quiet", o.quiet, "print nothing but errors and violations");
+  app.add_flag("--table", o.table, "print one table row per summary file instead of running");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : kExitBadInput;
+  }
+  if (o.table) {
+    if (!o.out_dir.empty() || !o.trace.empty() || !o.summary.empty()) {
+      std::fprintf(stderr, "error: --table takes only summary files (and --check)\n");
+      return kExitBadInput;
+    }
+    return print_summary_table(o.files, o.check);
+  }
+  if (o.files.size() != 1) {
+    std::fprintf(stderr, "error: expected exactly one scenario file, got %zu\n", o.files.size());
+    return kExitBadInput;
+  }
+  return run_scenario(o);
+}

@@ -1,0 +1,69 @@
+# Scenario files (scenarios/**/*.json) and the example helpers.
+#   scenarios_scenario_json_check  GoogleTest: the scenario-file parser of
+#       examples/scenario/scenario_json.hpp and examples/common/ (built here rather than
+#       by the *_test.cpp glob because it needs nlohmann-json)
+#   scenario.<dir>.<name>   one per shipped scenario file: inhand_scenario <file> --check
+#       --quiet --out <build>/scenario-out/<name> (fails when an expectation is violated)
+#   scenario_cli.*          exit status, messages and (absence of) output files of
+#       inhand_scenario for a violated expectation, a truncated and an invalid file
+#   scenario.paper_files_up_to_date   scripts/gen_paper_scenarios.py --check
+find_package(nlohmann_json 3 REQUIRED)
+set(INHAND_SCENARIOS_DIR ${PROJECT_SOURCE_DIR}/scenarios)
+
+add_executable(scenarios_scenario_json_check ${CMAKE_CURRENT_LIST_DIR}/scenario_json_check.cpp)
+target_include_directories(scenarios_scenario_json_check PRIVATE
+  ${PROJECT_SOURCE_DIR}/examples ${PROJECT_SOURCE_DIR}/examples/scenario ${PROJECT_SOURCE_DIR}/tests)
+target_link_libraries(scenarios_scenario_json_check PRIVATE inhand::inhand inhand_warnings
+  nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
+target_compile_definitions(scenarios_scenario_json_check PRIVATE
+  INHAND_SCENARIO_DIR="${INHAND_SCENARIOS_DIR}" INHAND_README="${PROJECT_SOURCE_DIR}/README.md")
+gtest_discover_tests(scenarios_scenario_json_check DISCOVERY_TIMEOUT 60
+  WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} PROPERTIES LABELS scenarios)
+
+# The runs need the inhand_scenario program (examples are added after the tests, so
+# the target is referred to by name).
+if(INHAND_BUILD_EXAMPLES)
+  file(GLOB_RECURSE INHAND_SCENARIO_FILES CONFIGURE_DEPENDS ${INHAND_SCENARIOS_DIR}/*.json)
+  set(seen_names)
+  foreach(file IN LISTS INHAND_SCENARIO_FILES)
+    get_filename_component(name ${file} NAME_WE)
+    file(RELATIVE_PATH rel ${INHAND_SCENARIOS_DIR} ${file})
+    get_filename_component(group ${rel} DIRECTORY)
+    string(REPLACE "/" "." group "${group}")
+    if(name IN_LIST seen_names)
+      message(FATAL_ERROR "two scenario files are named ${name}.json; their outputs would collide")
+    endif()
+    list(APPEND seen_names ${name})
+    add_test(NAME scenario.${group}.${name}
+      COMMAND inhand_scenario ${file} --check --quiet --out ${PROJECT_BINARY_DIR}/scenario-out/${name})
+    set_tests_properties(scenario.${group}.${name} PROPERTIES LABELS scenario TIMEOUT 120)
+  endforeach()
+
+  set(cli_data ${CMAKE_CURRENT_LIST_DIR}/data)
+  set(cli_out ${PROJECT_BINARY_DIR}/scenario-out/cli)
+  add_test(NAME scenario_cli.violation
+    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario>
+            -DSCENARIO=${cli_data}/violated_expectation.json -DOUT_DIR=${cli_out}/violation
+            -DEXPECT_EXIT=1 "-DEXPECT_OUTPUT=2 expectation\\(s\\) violated.*max_position_error.*expected to drop"
+            -DEXPECT_FILES=ON -DTABLE_EXIT=1 "-DTABLE_OUTPUT=violated_expectation.*FAIL.*1 failed"
+            -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
+  add_test(NAME scenario_cli.truncated_file
+    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario>
+            -DSCENARIO=${cli_data}/truncated.json -DOUT_DIR=${cli_out}/truncated
+            -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=truncated.json: object: malformed JSON.*end of input"
+            -DEXPECT_FILES=OFF -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
+  add_test(NAME scenario_cli.invalid_value
+    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario>
+            -DSCENARIO=${cli_data}/invalid_value.json -DOUT_DIR=${cli_out}/invalid
+            -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=invalid_value.json: object.mass: must be a number in \\(0, 100\\], got -1"
+            -DEXPECT_FILES=OFF -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
+  set_tests_properties(scenario_cli.violation scenario_cli.truncated_file scenario_cli.invalid_value
+    PROPERTIES LABELS scenario TIMEOUT 120)
+endif()
+
+find_package(Python3 COMPONENTS Interpreter QUIET)
+if(Python3_Interpreter_FOUND)
+  add_test(NAME scenario.paper_files_up_to_date
+    COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/scripts/gen_paper_scenarios.py --check)
+  set_tests_properties(scenario.paper_files_up_to_date PROPERTIES LABELS scenario TIMEOUT 60)
+endif()
