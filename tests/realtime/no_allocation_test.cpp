@@ -1,0 +1,261 @@
+// Proof that the per-tick path of a finger allocates nothing: forward_kinematics,
+// point_jacobian, ContactIk::solve (with and without the null-space term),
+// ContactIk::pseudo_inverse and HybridServo::update, for fixed-size fingers (planar 2
+// and 3 DOF, spatial 3, 4 and 5 DOF) and the run-time bounded finger (Dynamic,
+// MaxDof = 5), float and double.
+//
+// Two independent detectors guard the loop:
+//  - a counting replacement of every global operator new (plain, array, nothrow,
+//    aligned) catches any C++ allocation (std::vector, new, ...);
+//  - Eigen's run-time no-malloc guard (EIGEN_RUNTIME_NO_MALLOC,
+//    set_is_malloc_allowed(false)) aborts on any Eigen heap allocation, which goes
+//    through malloc and would bypass the counter.
+// Canary tests prove that both detectors trip. The guard is an assert, so asserts are
+// forced on in this file even in Release builds.
+#undef NDEBUG
+#define EIGEN_RUNTIME_NO_MALLOC
+
+#include <Eigen/Core>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cassert>
+#include <cmath>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "common/test_support.hpp"
+#include "inhand/controller/ik.hpp"
+#include "inhand/controller/servo.hpp"
+#include "inhand/kinematics/finger_chain.hpp"
+
+#if defined(NDEBUG) || defined(EIGEN_NO_DEBUG)
+#error "the no-malloc guard needs assertions enabled in this translation unit"
+#endif
+
+namespace {
+
+std::atomic<long> g_allocations{0};
+std::atomic<bool> g_counting{false};
+
+void* counted_malloc(std::size_t n) noexcept {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return std::malloc(n == 0 ? 1 : n);
+}
+
+void* counted_aligned_malloc(std::size_t n, std::align_val_t al) noexcept {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  std::size_t a = static_cast<std::size_t>(al);
+  if (a < sizeof(void*)) a = sizeof(void*);
+  void* p = nullptr;
+  if (posix_memalign(&p, a, n == 0 ? 1 : n) != 0) return nullptr;
+  return p;
+}
+
+// Out of line so that GCC does not pair an inlined operator new with free() and
+// report a mismatched allocation: both sides are malloc/free by construction.
+[[gnu::noinline]] void release(void* p) noexcept { std::free(p); }
+
+}  // namespace
+
+// Replacements of the global allocation functions (all of them, so no allocation can
+// slip past the counter). Deallocation is uncounted: only allocations matter.
+void* operator new(std::size_t n) {
+  if (void* p = counted_malloc(n)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) {
+  if (void* p = counted_malloc(n)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept { return counted_malloc(n); }
+void* operator new[](std::size_t n, const std::nothrow_t&) noexcept { return counted_malloc(n); }
+void* operator new(std::size_t n, std::align_val_t a) {
+  if (void* p = counted_aligned_malloc(n, a)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n, std::align_val_t a) {
+  if (void* p = counted_aligned_malloc(n, a)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return counted_aligned_malloc(n, a);
+}
+void* operator new[](std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return counted_aligned_malloc(n, a);
+}
+void operator delete(void* p) noexcept { release(p); }
+void operator delete[](void* p) noexcept { release(p); }
+void operator delete(void* p, std::size_t) noexcept { release(p); }
+void operator delete[](void* p, std::size_t) noexcept { release(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { release(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { release(p); }
+void operator delete(void* p, std::align_val_t) noexcept { release(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { release(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { release(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { release(p); }
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { release(p); }
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept { release(p); }
+
+namespace {
+
+/// While alive: Eigen heap allocation aborts, and C++ allocations are counted.
+class NoAllocationRegion {
+ public:
+  NoAllocationRegion() noexcept {
+    g_allocations.store(0);
+    Eigen::internal::set_is_malloc_allowed(false);
+    g_counting.store(true);
+  }
+  ~NoAllocationRegion() {
+    g_counting.store(false);
+    Eigen::internal::set_is_malloc_allowed(true);
+  }
+  NoAllocationRegion(const NoAllocationRegion&) = delete;
+  NoAllocationRegion& operator=(const NoAllocationRegion&) = delete;
+  /// Allocations counted since construction (read while still inside is fine).
+  long allocations() const noexcept { return g_allocations.load(); }
+};
+
+// Escapes pointers so the optimiser cannot drop an allocation as unused.
+void* volatile g_sink = nullptr;
+
+template <typename Chain>
+class NoAllocationTest : public ::testing::Test {};
+
+using Fingers =
+    ::testing::Types<inhand_test::Planar2<float>, inhand_test::Planar2<double>,
+                     inhand_test::Planar3<float>, inhand_test::Planar3<double>,
+                     inhand_test::Spatial3<float>, inhand_test::Spatial3<double>,
+                     inhand_test::Spatial4<float>, inhand_test::Spatial4<double>,
+                     inhand_test::Spatial5<float>, inhand_test::Spatial5<double>,
+                     inhand_test::SpatialBounded<float>, inhand_test::SpatialBounded<double>>;
+TYPED_TEST_SUITE(NoAllocationTest, Fingers, inhand_test::ChainNames);
+
+// The per-tick path of one finger under both detectors. Inputs are prepared outside
+// the region; every 7th tick uses the stretched (singular) pose so the damped branch
+// runs, and tight joint-velocity limits make the limited branch run too.
+TYPED_TEST(NoAllocationTest, PerTickPathDoesNotAllocate) {
+  using Chain = TypeParam;
+  using S = typename Chain::Scalar;
+  constexpr int Dim = Chain::Dim;
+  using V = inhand::Vector<S, Dim>;
+
+  const int dofs_to_check = Chain::Dof == inhand::Dynamic ? 3 : 1;  // bounded: 3, 4, 5 joints
+  for (int variant = 0; variant < dofs_to_check; ++variant) {
+    const Chain chain = Chain::Dof == inhand::Dynamic ? inhand_test::make_finger<Chain>(3 + variant)
+                                                      : inhand_test::make_finger<Chain>();
+    const int n = chain.dof();
+    auto rng = inhand_test::make_rng(501 + static_cast<unsigned>(variant));
+    const int ticks = inhand_test::scaled(500);
+    std::vector<typename Chain::JointVector> q;
+    std::vector<V> normals, desired_velocity;
+    for (int i = 0; i < ticks; ++i) {
+      q.push_back(inhand_test::random_joint_angles(chain, rng));
+      if (i % 7 == 0) q.back().setZero();
+      normals.push_back(inhand_test::random_unit_vector<S, Dim>(rng));
+      desired_velocity.push_back(inhand_test::random_vector<S, Dim>(rng, S(-0.05), S(0.05)));
+    }
+    inhand::FingerKinematics<Chain> ws(chain);
+    typename Chain::Jacobian J(Dim, n);
+    J.setZero();
+    inhand::ContactIk<S, Dim, Chain::Dof, Chain::MaxDof> ik(n);
+    using JointVector = typename decltype(ik)::JointVector;
+    typename decltype(ik)::PseudoInverse pinv(n, Dim);
+    pinv.setZero();
+    JointVector limits(n), z(n), qd(n), qd_ns(n);
+    limits.setConstant(S(0.8));
+    for (int i = 0; i < n; ++i) z(i) = S(0.1) * S(i + 1);
+    inhand::HybridServo<S, Dim> servo;
+    inhand::ServoCommand<S, Dim> cmd;
+
+    unsigned seen = 0;
+    double checksum = 0.0;
+    long counted = -1;
+    {
+      NoAllocationRegion region;
+      for (int i = 0; i < ticks; ++i) {
+        inhand::forward_kinematics(chain, q[static_cast<std::size_t>(i)], ws);
+        const V& nrm = normals[static_cast<std::size_t>(i)];
+        // Stretched ticks use the fingertip centre, on the link line: exactly singular.
+        const V contact = (i % 7 == 0) ? V(ws.fingertip.position)
+                                       : inhand::fingertip_surface_point(chain, ws, nrm);
+        inhand::point_jacobian(ws, contact, J);
+        servo.update(desired_velocity[static_cast<std::size_t>(i)], S(1), S(0.8), nrm, true, S(1e-3), cmd);
+        const auto r1 = ik.solve(J, cmd.total, limits, qd);
+        const auto r2 = ik.solve(J, cmd.total, limits, z, qd_ns);
+        const auto r3 = ik.pseudo_inverse(J, pinv);
+        seen |= static_cast<unsigned>(r1.status) | static_cast<unsigned>(r2.status) |
+                static_cast<unsigned>(r3.status);
+        checksum += static_cast<double>(qd.sum() + qd_ns.sum() + pinv.sum());
+      }
+      counted = region.allocations();
+    }
+    EXPECT_EQ(counted, 0) << "operator new called inside the per-tick path (" << n << " joints)";
+    EXPECT_TRUE(std::isfinite(checksum));
+    EXPECT_TRUE(seen & static_cast<unsigned>(inhand::IkStatus::damped)) << "damped branch not exercised";
+    EXPECT_TRUE(seen & static_cast<unsigned>(inhand::IkStatus::limited)) << "limited branch not exercised";
+    EXPECT_FALSE(seen & static_cast<unsigned>(inhand::IkStatus::invalid_input));
+  }
+}
+
+// Canary 1: the counter sees a plain new, an aligned new, a nothrow new and a
+// std::vector growing inside the region.
+TEST(NoAllocationCanary, CounterCatchesCppAllocations) {
+  struct alignas(64) Wide {
+    double v[8];
+  };
+  {
+    NoAllocationRegion region;
+    int* p = new int(3);
+    g_sink = p;
+    EXPECT_EQ(region.allocations(), 1);
+    delete p;
+  }
+  {
+    NoAllocationRegion region;
+    Wide* w = new Wide();
+    g_sink = w;
+    int* a = new (std::nothrow) int[4];
+    g_sink = a;
+    EXPECT_EQ(region.allocations(), 2);
+    delete[] a;
+    delete w;
+  }
+  std::vector<int> v;
+  long counted = 0;
+  {
+    NoAllocationRegion region;
+    v.push_back(1);
+    g_sink = v.data();
+    counted = region.allocations();
+  }
+  EXPECT_GE(counted, 1);
+  EXPECT_EQ(v.size(), 1u);
+}
+
+// Canary 2: an Eigen dynamic allocation inside the region aborts the process through
+// Eigen's no-malloc assertion; fixed-size Eigen objects do not.
+TEST(NoAllocationCanaryDeathTest, EigenGuardAbortsOnDynamicAllocation) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_DEATH(
+      {
+        NoAllocationRegion region;
+        Eigen::MatrixXd m(8, 8);
+        m.setZero();
+        g_sink = m.data();
+      },
+      "heap allocation is forbidden");
+  {
+    NoAllocationRegion region;
+    EXPECT_FALSE(Eigen::internal::is_malloc_allowed());
+    Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, 5> bounded(3, 4);
+    bounded.setOnes();
+    g_sink = bounded.data();
+    EXPECT_EQ(region.allocations(), 0);
+  }
+  EXPECT_TRUE(Eigen::internal::is_malloc_allowed());
+}
+
+}  // namespace
