@@ -99,7 +99,9 @@ class ForcePlanner {
   /// Plans desired forces. `touching(i)` != 0 when finger i is in contact; `normals`
   /// column i is its measured outward normal (ignored when not touching). dt > 0 is
   /// the tick for the filter. Writes `desired` and the resultant sum f_i n_i to
-  /// `residual`.
+  /// `residual`. Invalid input (dt not finite and > 0, or a touching finger's normal
+  /// not finite): returns invalid_input, `desired` = the last plan (zero before the
+  /// first), `residual` = 0, and nothing else changes.
   ForcePlanStatus plan(const Mask& touching, const Normals& normals, Scalar dt, ForceVector& desired,
                        Vector<Scalar, Dim>& residual) noexcept {
     const int n = size();
@@ -137,7 +139,9 @@ class ForcePlanner {
       G.noalias() = nb_.leftCols(k).transpose() * nb_.leftCols(k);
       G.diagonal().array() += rho;
       auto b = rhs_.head(k);
-      b.noalias() = -(nb_.leftCols(k).transpose() * preset_sum);
+      // Negating the fixed-size right-hand side, not the product: a negated product
+      // is evaluated into a temporary, which allocates for a run-time finger count.
+      b.noalias() = nb_.leftCols(k).transpose() * Vector<Scalar, Dim>(-preset_sum);
       b.array() += rho * f0;
       solve_small(k);
       int j = 0;

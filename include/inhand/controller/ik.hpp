@@ -10,7 +10,9 @@
 // Joint-velocity limits: if any |theta_dot_i| exceeds its limit, the WHOLE vector is
 // scaled by the largest factor s in (0, 1] that respects every limit, so the direction
 // of the Cartesian motion is kept; the status says `limited` and reports s.
-// Invalid input (non-finite J, x_dot, limits or z): theta_dot = 0, status invalid_input.
+// Invalid input (non-finite J, x_dot, limits or z, or finite values so large that the
+// solution overflows, e.g. |J|^2 > the largest Scalar): theta_dot = 0, status
+// invalid_input.
 // Units: x_dot in m/s, theta_dot in rad/s. noexcept; fixed sizes never allocate.
 #pragma once
 
@@ -120,6 +122,11 @@ class ContactIk {
     report.damping = f.damping;
     if (f.damped) report.status = IkStatus::damped;
     dls_.pseudo_inverse(J, out);
+    if (!all_finite(out)) {  // finite but enormous J: the Gram matrix overflowed
+      out.setZero();
+      report = IkReport<Scalar>{};
+      report.status = IkStatus::invalid_input;
+    }
     return report;
   }
 
@@ -152,6 +159,12 @@ class ContactIk {
       // theta_dot += (I - J^+ J) z, evaluated as z - J^+ (J z): no n x n temporary.
       ns_.noalias() = pinv_ * (J * (*z));
       theta_dot += *z - ns_;
+    }
+    if (!all_finite(theta_dot)) {  // finite but enormous J, x_dot or z: overflow
+      theta_dot.setZero();
+      report = IkReport<Scalar>{};
+      report.status = IkStatus::invalid_input;
+      return report;
     }
     Scalar s = Scalar(1);
     for (int i = 0; i < theta_dot.size(); ++i) {
