@@ -78,6 +78,50 @@ template <typename Scalar>
 inline Rotation<Scalar, 2> joint_rotation(const Vector<Scalar, 2>&, Scalar q) noexcept {
   return so2_exp<Scalar>(q);
 }
+
+/// k when `axis` is exactly +e_k or -e_k (sign set to +1 or -1), otherwise -1.
+template <typename Scalar>
+inline int coordinate_axis(const Vector<Scalar, 3>& axis, Scalar& sign) noexcept {
+  for (int k = 0; k < 3; ++k) {
+    const Scalar a = axis(k);
+    if ((a == Scalar(1) || a == Scalar(-1)) && axis((k + 1) % 3) == Scalar(0) &&
+        axis((k + 2) % 3) == Scalar(0)) {
+      sign = a;
+      return k;
+    }
+  }
+  return -1;
+}
+
+/// One joint of forward_kinematics in space: writes the joint's world axis R * axis
+/// and turns R into R * Rot(axis, q). Real fingers mostly turn about a coordinate axis
+/// of their joint frame; R * Rot(+-e_k, q) then only mixes the other two columns of R
+/// (12 flops instead of building Rot and a 3 x 3 product), with the same result up to
+/// rounding.
+template <typename Scalar, typename DerivedAxis>
+inline void apply_joint(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Scalar q,
+                        const Eigen::MatrixBase<DerivedAxis>& world_axis_out) noexcept {
+  auto& world_axis = const_cast<Eigen::MatrixBase<DerivedAxis>&>(world_axis_out);
+  Scalar sign = Scalar(1);
+  const int k = coordinate_axis(axis, sign);
+  if (k < 0) {
+    world_axis = R * axis;
+    R = R * joint_rotation<Scalar>(axis, q);
+    return;
+  }
+  world_axis = sign * R.col(k);
+  const Scalar c = std::cos(q), s = sign * std::sin(q);
+  const int a = (k + 1) % 3, b = (k + 2) % 3;  // Rot_k maps e_a -> c e_a + s e_b
+  const Vector<Scalar, 3> ca = R.col(a), cb = R.col(b);
+  R.col(a) = c * ca + s * cb;
+  R.col(b) = c * cb - s * ca;
+}
+
+/// Exactly the identity (the common case of a joint frame not turned at q = 0).
+template <typename Scalar, int Dim>
+inline bool is_identity(const Rotation<Scalar, Dim>& R) noexcept {
+  return R == Rotation<Scalar, Dim>::Identity();
+}
 }  // namespace detail
 
 /// Read-only description of one finger. Dof: exact joint count or inhand::Dynamic;
@@ -180,18 +224,21 @@ inline void forward_kinematics(const Chain& chain, const Eigen::MatrixBase<Deriv
   for (int i = 0; i < chain.dof(); ++i) {
     const auto& j = chain.joints[i];
     p += R * j.parent_to_joint.position;
-    R = R * j.parent_to_joint.rotation;
+    if (!detail::is_identity(j.parent_to_joint.rotation)) R = R * j.parent_to_joint.rotation;
     ws.joint_origins.col(i) = p;
     if constexpr (Dim == 3) {
-      ws.joint_axes.col(i) = R * j.axis;
-      R = R * detail::joint_rotation<Scalar>(j.axis, q(i));
+      detail::apply_joint<Scalar>(R, j.axis, static_cast<Scalar>(q(i)), ws.joint_axes.col(i));
     } else {
       ws.joint_axes.col(i) = Vector<Scalar, 3>(Scalar(0), Scalar(0), j.axis.z());
       R = R * so2_exp<Scalar>(j.axis.z() * q(i));
     }
   }
   ws.fingertip.position = p + R * chain.joint_to_tip.position;
-  ws.fingertip.rotation = R * chain.joint_to_tip.rotation;
+  if (detail::is_identity(chain.joint_to_tip.rotation)) {
+    ws.fingertip.rotation = R;
+  } else {
+    ws.fingertip.rotation = R * chain.joint_to_tip.rotation;
+  }
 }
 
 /// Jacobian of the world velocity of a point attached to the distal link and now at

@@ -124,7 +124,9 @@ class DampedLeastSquares {
       x.setZero(n_);
       return;
     }
-    Eigen::Matrix<Scalar, 3, 1> y;
+    // Zero-initialised: for M < 3 the unused tail would otherwise trip GCC 12's
+    // -Wmaybe-uninitialized through the run-time-k Cholesky dispatch.
+    Eigen::Matrix<Scalar, 3, 1> y = Eigen::Matrix<Scalar, 3, 1>::Zero();
     if (wide_) {
       y.template head<M>() = b;
       cholesky_solve(y);
@@ -182,44 +184,136 @@ class DampedLeastSquares {
       const Scalar big = mean + half;
       return big > Scalar(0) ? (a * d - b * b) / big : Scalar(0);
     }
-    Eigen::Matrix<Scalar, 3, 1> ev;
-    // The iterative (QR) solver is backward stable: |error| ~ eps * |G|, i.e. the
-    // resolution stated above. The closed-form computeDirect() was measured 1e7 times
-    // worse on the smallest eigenvalue of near-singular 3 x 3 Gram matrices (double).
-    // Fixed 3 x 3: no allocation either way.
+    return smallest_eigenvalue_3x3();
+  }
+
+  /// Smallest eigenvalue of the full 3 x 3 Gram matrix, to |error| ~ eps |G| (the
+  /// resolution stated above, that of a backward-stable solver).
+  /// Newton's method on det(G - x I) from below, started just under the closed-form
+  /// (trigonometric) estimate: for x < mu_min, G - x I is positive definite, its LDL^T
+  /// factorisation is backward stable, and the Newton step 1 / tr((G - x I)^-1) never
+  /// overshoots mu_min, so every iterate is a lower bound. The closed form alone is
+  /// not accurate enough (up to ~1e7 eps |G| off for clustered eigenvalues), but its
+  /// error is small next to the gap to the second eigenvalue whenever that gap is not
+  /// tiny, and then one step reaches eps |G|. When the start is not below mu_min
+  /// (the closed form was further off than the margin allows) or the iteration does
+  /// not settle within four steps (clustered smallest eigenvalues), Eigen's iterative
+  /// (QR) solver decides. Fixed 3 x 3 storage: no allocation on any path.
+  Scalar smallest_eigenvalue_3x3() const noexcept {
+    const Scalar tr = gram_.trace();
+    if (!(tr > Scalar(0))) return Scalar(0);
+    const Scalar tiny = Eigen::NumTraits<Scalar>::epsilon() * tr;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 3, 3>> eig;
-    eig.compute(gram_, Eigen::EigenvaluesOnly);
-    ev = eig.eigenvalues();
-    return ev(0);
+    eig.computeDirect(gram_, Eigen::EigenvaluesOnly);
+    const Eigen::Matrix<Scalar, 3, 1> e = eig.eigenvalues();
+    // Start below the estimate by more than its error, which was measured to stay
+    // under ~30 eps tr sqrt(tr / gap) (gap: the estimated distance to the second
+    // eigenvalue); a start that is still too high is detected and handed over.
+    const Scalar gap = e(1) - e(0);
+    const Scalar margin = Scalar(64) * tiny * std::sqrt(tr / (gap > tiny ? gap : tiny));
+    const bool separated = gap > Scalar(8) * margin;  // e(1), e(2) then usable as bounds
+    Scalar x = e(0) - margin;
+    for (int it = 0; it < 4; ++it) {
+      Scalar inverse_trace;
+      if (!shifted_inverse_trace(x, inverse_trace)) {
+        // At a later step x has reached mu_min to within rounding.
+        if (it == 0) break;
+        return x > Scalar(0) ? x : Scalar(0);
+      }
+      const Scalar step = Scalar(1) / inverse_trace;
+      x += step;
+      if (step <= tiny) return x > Scalar(0) ? x : Scalar(0);
+      if (separated) {
+        // After a step of length s from below, mu_min - x ~ s^2 sum_{i>1} 1/(mu_i - mu_min).
+        const Scalar d2 = e(1) - margin - x, d3 = e(2) - margin - x;
+        if (d2 > Scalar(0) && Scalar(2) * step * step * (Scalar(1) / d2 + Scalar(1) / d3) <= tiny)
+          return x > Scalar(0) ? x : Scalar(0);
+      }
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 3, 3>> qr;
+    qr.compute(gram_, Eigen::EigenvaluesOnly);
+    return qr.eigenvalues()(0);
+  }
+
+  /// tr((G - x I)^-1) from the LDL^T factorisation of G - x I; false if a pivot is not
+  /// positive (x is not below the smallest eigenvalue, or G is not finite).
+  bool shifted_inverse_trace(Scalar x, Scalar& out) const noexcept {
+    const Scalar d0 = gram_(0, 0) - x;
+    if (!(d0 > Scalar(0))) return false;
+    const Scalar i0 = Scalar(1) / d0;
+    const Scalar l10 = gram_(1, 0) * i0, l20 = gram_(2, 0) * i0;
+    const Scalar d1 = gram_(1, 1) - x - l10 * gram_(1, 0);
+    if (!(d1 > Scalar(0))) return false;
+    const Scalar i1 = Scalar(1) / d1;
+    const Scalar e21 = gram_(2, 1) - l20 * gram_(1, 0);
+    const Scalar l21 = e21 * i1;
+    const Scalar d2 = gram_(2, 2) - x - l20 * gram_(2, 0) - l21 * e21;
+    if (!(d2 > Scalar(0))) return false;
+    const Scalar i2 = Scalar(1) / d2;
+    // (G - x I)^-1 = L^-T D^-1 L^-1 with L^-1 = [1 0 0; -l10 1 0; l10 l21 - l20, -l21, 1].
+    const Scalar m20 = l10 * l21 - l20;
+    out = i0 + (Scalar(1) + l10 * l10) * i1 + (Scalar(1) + l21 * l21 + m20 * m20) * i2;
+    return true;
   }
 
   /// Cholesky of the leading k x k block of G + l2 I into chol_ (lower). false if
   /// not positive definite (only possible for a rank-deficient J with l2 == 0).
+  /// The size is a template argument so that the tiny loops unroll: it is known at
+  /// compile time for a fixed N and dispatched once (k = 1, 2 or 3) otherwise.
   bool cholesky(Scalar l2) noexcept {
-    for (int c = 0; c < k_; ++c) {
+    if constexpr (kFixedK > 0) {
+      return cholesky_k<kFixedK>(l2);
+    } else {
+      if (k_ == 1) return cholesky_k<1>(l2);
+      if (k_ == 2) return cholesky_k<(M < 2 ? M : 2)>(l2);
+      return cholesky_k<M>(l2);
+    }
+  }
+  void cholesky_solve(Eigen::Matrix<Scalar, 3, 1>& y) const noexcept {
+    if constexpr (kFixedK > 0) {
+      cholesky_solve_k<kFixedK>(y);
+    } else if (k_ == 1) {
+      cholesky_solve_k<1>(y);
+    } else if (k_ == 2) {
+      cholesky_solve_k<(M < 2 ? M : 2)>(y);
+    } else {
+      cholesky_solve_k<M>(y);  // k = M: never instantiates a larger size than y holds
+    }
+  }
+  /// k = min(M, N) when N is fixed, otherwise 0 (run-time).
+  static constexpr int kFixedK = N == Eigen::Dynamic ? 0 : (N < M ? N : M);
+
+  template <int K>
+  bool cholesky_k(Scalar l2) noexcept {
+    for (int c = 0; c < K; ++c) {
       Scalar d = gram_(c, c) + l2;
       for (int p = 0; p < c; ++p) d -= chol_(c, p) * chol_(c, p);
       if (!(d > Scalar(0))) return false;
       d = std::sqrt(d);
       chol_(c, c) = d;
-      for (int r = c + 1; r < k_; ++r) {
+      // The substitutions multiply by the reciprocal: one division per pivot here
+      // instead of two per solve on the latency chain.
+      const Scalar inv = Scalar(1) / d;
+      inv_diag_(c) = inv;
+      for (int r = c + 1; r < K; ++r) {
         Scalar v = gram_(r, c);
         for (int p = 0; p < c; ++p) v -= chol_(r, p) * chol_(c, p);
-        chol_(r, c) = v / d;
+        chol_(r, c) = v * inv;
       }
     }
     return true;
   }
-  void cholesky_solve(Eigen::Matrix<Scalar, 3, 1>& y) const noexcept {
-    for (int r = 0; r < k_; ++r) {
+  template <int K>
+  void cholesky_solve_k(Eigen::Matrix<Scalar, 3, 1>& y) const noexcept {
+    for (int r = 0; r < K; ++r) {
       Scalar v = y(r);
       for (int p = 0; p < r; ++p) v -= chol_(r, p) * y(p);
-      y(r) = v / chol_(r, r);
+      y(r) = v * inv_diag_(r);
     }
-    for (int r = k_ - 1; r >= 0; --r) {
+    for (int r = K - 1; r >= 0; --r) {
       Scalar v = y(r);
-      for (int p = r + 1; p < k_; ++p) v -= chol_(p, r) * y(p);
-      y(r) = v / chol_(r, r);
+      for (int p = r + 1; p < K; ++p) v -= chol_(p, r) * y(p);
+      y(r) = v * inv_diag_(r);
     }
   }
 
@@ -229,6 +323,7 @@ class DampedLeastSquares {
   bool factored_ = false;
   Eigen::Matrix<Scalar, 3, 3> gram_;
   Eigen::Matrix<Scalar, 3, 3> chol_;
+  Eigen::Matrix<Scalar, 3, 1> inv_diag_ = Eigen::Matrix<Scalar, 3, 1>::Zero();
 };
 
 }  // namespace inhand
