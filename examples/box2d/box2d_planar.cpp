@@ -3,7 +3,8 @@
 // hold, translate +-0.5 u along x and along y, rotate 0 -> -0.2 rad -> 0.
 // Scale: 1 Box2D unit (u) = 1 cm of the real hand; forces in N (planar_world.hpp).
 //
-//   box2d_planar                      the four shipped scenarios and the negative one
+//   box2d_planar                      the four shipped scenarios, the negative one and the
+//                                     four fault scenarios (box_gravity_<fault>)
 //   box2d_planar --scenario box_flat  only the named scenario(s) (--list shows them)
 //   box2d_planar --out dir            output directory (default out/box2d)
 //
@@ -12,8 +13,10 @@
 // and the expectations, examples/common/summary_json.hpp) and SVG snapshots
 // (grasped.svg, mid_<stage>.svg at each manipulation's turning point, dropping.svg if the
 // object leaves the grasp, end.svg); prints a
-// table. Exits 1 when an expectation is violated (for the negative scenario, the
-// expectation is that the object drops), 2 on bad arguments, 3 on an I/O error.
+// table (and, for a fault scenario, what the controller made of the fault). Exits 1 when
+// an expectation is violated (for the negative scenario, the expectation is that the
+// object drops; for a fault scenario, also that the fault is reported and a lost contact
+// reacquired), 2 on bad arguments, 3 on an I/O error.
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
@@ -21,6 +24,7 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "planar_scenario.hpp"
@@ -35,6 +39,7 @@ namespace {
 std::vector<b2d::ScenarioSpec> all_scenarios() {
   std::vector<b2d::ScenarioSpec> s = b2d::shipped_scenarios();
   s.push_back(b2d::dropped_object_scenario());
+  for (b2d::ScenarioSpec& f : b2d::fault_scenarios()) s.push_back(std::move(f));
   return s;
 }
 
@@ -86,6 +91,20 @@ void print_summary(const b2d::ScenarioSpec& spec, const b2d::ScenarioResult& r,
   std::printf("  dropped %s, contact losses %d, link contacts %d%s\n", r.dropped ? "yes" : "no",
               r.contact_losses, r.link_contacts,
               r.failure.empty() ? "" : ("; stopped: " + r.failure).c_str());
+  for (std::size_t i = 0; i < r.faults.size() && i < spec.faults.size(); ++i) {
+    const b2d::FaultReport& f = r.faults[i];
+    const bool contact =
+        f.kind == b2d::FaultSpec::Kind::tactile_dropout || f.kind == b2d::FaultSpec::Kind::knock;
+    const bool finger = f.kind == b2d::FaultSpec::Kind::tactile_dropout ||
+                        f.kind == b2d::FaultSpec::Kind::force_spike;
+    std::printf("  fault %s%s, %s +%.3f s for %.0f ms: detected after %ld tick(s)",
+                to_string(f.kind),
+                finger ? (" (finger " + std::to_string(f.finger) + ")").c_str() : "",
+                spec.faults[i].stage.c_str(), spec.faults[i].at, 1e3 * spec.faults[i].duration,
+                f.detection_ticks);
+    if (contact) std::printf(", all contacts back %ld tick(s) after it", f.reacquire_ticks);
+    std::printf(", max |force integral| %.2g N s\n", f.max_force_integral);
+  }
   for (const std::string& v : s.violations) std::printf("  VIOLATED: %s\n", v.c_str());
   std::printf("  %s\n",
               s.passed() ? (spec.expect_drop ? "PASS (dropped, as expected)" : "PASS") : "FAIL");

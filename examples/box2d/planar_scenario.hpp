@@ -13,11 +13,16 @@
 //                had at the start of the stage (the paper's stage 1).
 //   manipulate : the stage's trajectory segments from the desired pose the previous
 //                stage ended on, then `settle` seconds of hold.
+// Faults (FaultSpec, as in inhand/plant/scenario.hpp): sensing corruption applied to the
+// controller's input before update(), a disturbance force on the object during the step;
+// each gets a FaultReport (detection, reacquisition, force-integral windup).
 // Units: see planar_world.hpp (1 u = 1 cm of the real hand, N, rad, s).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -55,6 +60,54 @@ struct CommandOverride {
   JointVector joint_velocity = JointVector::Zero();  ///< rad/s
 };
 
+/// A fault injected into a run (the 3-D plant's FaultSpec, inhand/plant/scenario.hpp, in
+/// the plane). Active from `at` s into the stage named `stage` for `duration` s:
+///   tactile_dropout : finger's tactile signal reads "not touching"
+///   force_spike     : finger's sensed normal force += `magnitude` N (while touching)
+///   pose_outlier    : sensed object position += `vector` (u)
+///   knock           : external force `vector` (N, world) on the object's centre
+struct FaultSpec {
+  enum class Kind { tactile_dropout, force_spike, pose_outlier, knock };
+  Kind kind = Kind::tactile_dropout;
+  std::string stage = "translate_x";
+  double at = 1.0;         ///< s into the stage
+  double duration = 0.05;  ///< s
+  int finger = 0;
+  double magnitude = 0.0;      ///< N, force_spike
+  Vec2 vector = Vec2::Zero();  ///< u (pose_outlier) or N (knock)
+};
+inline const char* to_string(FaultSpec::Kind k) noexcept {
+  switch (k) {
+    case FaultSpec::Kind::tactile_dropout:
+      return "tactile_dropout";
+    case FaultSpec::Kind::force_spike:
+      return "force_spike";
+    case FaultSpec::Kind::pose_outlier:
+      return "pose_outlier";
+    case FaultSpec::Kind::knock:
+      return "knock";
+  }
+  return "unknown";
+}
+
+/// What the controller made of an injected fault (as the 3-D plant's FaultReport).
+struct FaultReport {
+  FaultSpec::Kind kind = FaultSpec::Kind::tactile_dropout;
+  int finger = 0;
+  double start_time = -1.0;  ///< s, scenario time of the fault's first tick (-1: never active)
+  /// Ticks from the fault's first tick to the first tick the controller reported it:
+  /// tactile_dropout: that finger `reacquiring`; force_spike: the force_outlier warning;
+  /// pose_outlier: the pose_outlier warning; knock: status contact_lost. -1: never.
+  long detection_ticks = -1;
+  /// Dropout/knock, once detected: ticks after the fault window until the status is
+  /// `ok` again (every finger in contact). -1: not within the run.
+  long reacquire_ticks = -1;
+  /// Largest |force integral| of any finger's force PI from the fault's start on (N s).
+  double max_force_integral = 0.0;
+  /// Ticks on which the fault's report (as for detection_ticks) was raised.
+  long reported_ticks = 0;
+};
+
 struct ScenarioSpec {
   std::string name = "scenario";
   HandSpec hand{};
@@ -64,15 +117,17 @@ struct ScenarioSpec {
   std::vector<StageSpec> stages;
   MetricsTolerances tolerances{};
   CommandOverride command_override{};
+  std::vector<FaultSpec> faults;
   bool expect_drop = false;  ///< the negative case: it is expected to drop
 };
 
 struct ScenarioResult {
   std::vector<StageMetrics> stages;
   bool dropped = false;
-  int contact_losses = 0;  ///< after the grasp stage
-  int link_contacts = 0;   ///< a non-sensing link touched the object
-  std::string failure;     ///< empty when every stage ran
+  int contact_losses = 0;           ///< after the grasp stage
+  int link_contacts = 0;            ///< a non-sensing link touched the object
+  std::string failure;              ///< empty when every stage ran
+  std::vector<FaultReport> faults;  ///< one per ScenarioSpec::faults entry
 };
 
 /// One control tick, as seen by trace writers and snapshot takers.
@@ -231,6 +286,63 @@ inline ScenarioSpec dropped_object_scenario() {
   return s;
 }
 
+/// The outlier gates of the fault scenarios: those of the 3-D fault scenarios
+/// (scenarios/faults/*.json: 0.2 m/s, 5 rad/s, 200 N/s, 5 rejections in a row), lengths
+/// scaled to u. The shipped scenarios run without gates (the library default, +inf).
+inline OutlierGates<double> box2d_outlier_gates() {
+  OutlierGates<double> g;
+  g.max_object_speed = 0.2 * kLengthScale;  // 20 u/s
+  g.max_object_angular_speed = 5.0;
+  g.max_force_rate = 200.0;
+  g.max_consecutive_rejections = 5;
+  return g;
+}
+
+/// One fault scenario, as the 3-D ones (scenarios/faults/*.json): box under gravity,
+/// grasp, release and hold 2 s, translate_x (+-0.5 u, 2 x 4 s, 1 s of settle), the
+/// outlier gates on, and one fault 1 s into translate_x (the object at its fastest):
+///   tactile_dropout : finger 1's tactile signal drops out for 50 ms
+///   force_spike     : +3 N on finger 0's sensed force for 4 ms
+///   pose_outlier    : the sensed position jumps by 1 u (1 cm) along x for 3 ms
+///   knock           : 3 N along +x (towards finger 1) for 10 ms
+inline ScenarioSpec fault_scenario(FaultSpec::Kind kind) {
+  ScenarioSpec s = paper_scenario(ObjectShape::box, true);
+  s.name = std::string("box_gravity_") + to_string(kind);
+  s.stages.resize(3);  // grasp, hold, translate_x
+  s.controller.outlier_gates = box2d_outlier_gates();
+  FaultSpec f;
+  f.kind = kind;
+  f.stage = "translate_x";
+  f.at = 1.0;
+  switch (kind) {
+    case FaultSpec::Kind::tactile_dropout:
+      f.finger = 1;
+      f.duration = 0.05;
+      break;
+    case FaultSpec::Kind::force_spike:
+      f.finger = 0;
+      f.duration = 0.004;
+      f.magnitude = 3.0;
+      break;
+    case FaultSpec::Kind::pose_outlier:
+      f.duration = 0.003;
+      f.vector = Vec2(0.01 * kLengthScale, 0.0);
+      break;
+    case FaultSpec::Kind::knock:
+      f.duration = 0.01;
+      f.vector = Vec2(3.0, 0.0);
+      break;
+  }
+  s.faults.push_back(f);
+  return s;
+}
+
+inline std::vector<ScenarioSpec> fault_scenarios() {
+  return {fault_scenario(FaultSpec::Kind::tactile_dropout),
+          fault_scenario(FaultSpec::Kind::force_spike),
+          fault_scenario(FaultSpec::Kind::pose_outlier), fault_scenario(FaultSpec::Kind::knock)};
+}
+
 inline std::vector<ScenarioSpec> shipped_scenarios() {
   return {paper_scenario(ObjectShape::box, false), paper_scenario(ObjectShape::circle, false),
           paper_scenario(ObjectShape::box, true), paper_scenario(ObjectShape::circle, true)};
@@ -259,6 +371,27 @@ class ScenarioRunner {
     PlanarController::Output out = controller.make_output();
 
     ScenarioResult result;
+    struct FaultTracking {
+      long start_tick = -1, end_tick = -1;
+      bool window_over = false;
+    };
+    std::vector<FaultTracking> fault_state(spec.faults.size());
+    result.faults.resize(spec.faults.size());
+    for (std::size_t fi = 0; fi < spec.faults.size(); ++fi) {
+      const FaultSpec& fs = spec.faults[fi];
+      if (fs.finger < 0 || fs.finger >= kFingers)
+        throw std::invalid_argument("fault: finger index out of range");
+      if (!(fs.duration >= 0.0) || !(fs.at >= 0.0))
+        throw std::invalid_argument("fault: negative or NaN time");
+      if (!fs.vector.allFinite() || !std::isfinite(fs.magnitude))
+        throw std::invalid_argument("fault: non-finite magnitude or vector");
+      if (std::none_of(spec.stages.begin(), spec.stages.end(),
+                       [&](const StageSpec& st) { return st.name == fs.stage; }))
+        throw std::invalid_argument("fault: no stage named '" + fs.stage + "'");
+      result.faults[fi].kind = fs.kind;
+      result.faults[fi].finger = fs.finger;
+    }
+    long global_tick = 0;
     Pose<double, 2> desired_end = world.object_pose();
     std::vector<FingerTruth> truth(kFingers);
     auto read_truth = [&]() {
@@ -328,7 +461,74 @@ class ScenarioRunner {
             fi.contact.normal_force = r.normal_force;
           }
         }
+        // Injected faults: sensing corruption before the controller sees the data, the
+        // knock force during the step (as inhand/plant/scenario.hpp).
+        const double ts = t - stage_start;  // stage time at the start of this tick
+        auto fault_active = [&](const FaultSpec& fs) {
+          return fs.stage == st.name && ts + 1e-12 >= fs.at && ts + 1e-12 < fs.at + fs.duration;
+        };
+        Vec2 knock_force = Vec2::Zero();
+        for (std::size_t fi = 0; fi < spec.faults.size(); ++fi) {
+          const FaultSpec& fs = spec.faults[fi];
+          if (!fault_active(fs)) continue;
+          auto& finger_in = in.fingers[static_cast<std::size_t>(fs.finger)];
+          switch (fs.kind) {
+            case FaultSpec::Kind::tactile_dropout:
+              finger_in.contact.touching = false;
+              break;
+            case FaultSpec::Kind::force_spike:
+              if (finger_in.contact.touching) finger_in.contact.normal_force += fs.magnitude;
+              break;
+            case FaultSpec::Kind::pose_outlier:
+              in.object_pose.position += fs.vector;
+              break;
+            case FaultSpec::Kind::knock:
+              knock_force += fs.vector;
+              break;
+          }
+          if (fault_state[fi].start_tick < 0) {
+            fault_state[fi].start_tick = global_tick;
+            result.faults[fi].start_time = t;
+          }
+        }
+        world.set_object_force(knock_force);
         const ControllerStatus status = controller.update(in, out);
+        for (std::size_t fi = 0; fi < spec.faults.size(); ++fi) {
+          const FaultSpec& fs = spec.faults[fi];
+          FaultTracking& ft = fault_state[fi];
+          FaultReport& fr = result.faults[fi];
+          if (ft.start_tick < 0) continue;
+          bool reported = false;
+          switch (fs.kind) {
+            case FaultSpec::Kind::pose_outlier:
+              reported = has(out.warnings, ControllerWarning::pose_outlier);
+              break;
+            case FaultSpec::Kind::force_spike:
+              reported = has(out.warnings, ControllerWarning::force_outlier);
+              break;
+            case FaultSpec::Kind::tactile_dropout:
+              reported = out.fingers[static_cast<std::size_t>(fs.finger)].state ==
+                         FingerState::reacquiring;
+              break;
+            case FaultSpec::Kind::knock:
+              reported = status == ControllerStatus::contact_lost;
+              break;
+          }
+          if (reported) ++fr.reported_ticks;
+          if (reported && fr.detection_ticks < 0) fr.detection_ticks = global_tick - ft.start_tick;
+          if (!fault_active(fs) && !ft.window_over) {
+            ft.window_over = true;
+            ft.end_tick = global_tick;
+          }
+          // Unlike the 3-D runner, only once detected: a knock's contact loss may come
+          // after its window, and an "ok" before it is no reacquisition.
+          if (ft.window_over && fr.detection_ticks >= 0 && fr.reacquire_ticks < 0 &&
+              status == ControllerStatus::ok &&
+              (fs.kind == FaultSpec::Kind::tactile_dropout || fs.kind == FaultSpec::Kind::knock))
+            fr.reacquire_ticks = global_tick - ft.end_tick;
+          fr.max_force_integral = std::max(fr.max_force_integral, controller.max_force_integral());
+        }
+        ++global_tick;
         const CommandOverride& co = spec.command_override;
         for (int i = 0; i < kFingers; ++i) {
           const bool overridden = co.finger == i && co.stage == static_cast<int>(si) &&

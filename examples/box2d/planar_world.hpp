@@ -16,7 +16,8 @@
 // motors), so it gives way isotropically by f / pad_stiffness. Box2D contacts are rigid;
 // without this compliance a velocity-driven finger could press only with whatever torque
 // saturates its motor, and the normal force would not be controllable.
-// Object: a box or a circle, static while frozen (the grasp stage), dynamic once released.
+// Object: a box or a circle, static while frozen (the grasp stage), dynamic once released;
+// set_object_force() pushes it with an external force (a disturbance, the "knock" fault).
 //
 // Sensing (everything the controller may read; FingerChain models the links and pad):
 //   joint angles    b2RevoluteJoint::GetJointAngle (encoders)
@@ -189,11 +190,19 @@ class PlanarWorld {
     for (int j = 0; j < kLinks; ++j) joint(finger, j)->SetMotorSpeed(static_cast<float>(qdot(j)));
   }
 
+  /// External force (N, world) on the object's centre, applied in every Box2D step
+  /// until changed (a disturbance: the "knock" fault). Ignored while the object is frozen.
+  void set_object_force(const Vec2& f) noexcept { object_force_ = f; }
+  const Vec2& object_force() const noexcept { return object_force_; }
+
   /// Advances by dt (one control tick) in params.substeps fixed Box2D steps.
   void step(double dt) {
     const double h = dt / params_.substeps;
     tracker_.impulse.fill(0.0);
     for (int s = 0; s < params_.substeps; ++s) {
+      // Box2D clears applied forces after every step: apply it again each substep.
+      if (!object_force_.isZero(0.0) && !object_frozen())
+        object_->ApplyForceToCenter(to_b2(object_force_), true);
       world_->Step(static_cast<float>(h), params_.velocity_iterations, params_.position_iterations);
       accumulate_slip(h);
     }
@@ -469,6 +478,7 @@ class PlanarWorld {
   std::array<b2Body*, kFingers> pads_{};
   std::array<double, kFingers> force_{};
   std::array<double, kFingers> slip_{};
+  Vec2 object_force_ = Vec2::Zero();
   double time_ = 0.0;
 };
 

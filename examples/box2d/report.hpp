@@ -4,9 +4,11 @@
 // servo parts), the run summary (common/summary_json.hpp) and the expectations
 // (common/expectations.hpp). The numbers are in the demo's scaled units (planar_world.hpp:
 // u = 1 cm of the real hand, N, rad, s) where the common headers say SI metres; the
-// summary's extra "units" entry says so.
+// summary's extra "units" entry says so. Fault scenarios add the outlier gates and one
+// report per injected fault ("faults") to the summary, and their checks to the verdict.
 #pragma once
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -44,7 +46,12 @@ inline examples::Expectations box2d_expectations(const ScenarioSpec& spec, const
     return e;
   }
   all.must_not_drop = true;
-  all.max_contact_losses = 0;
+  // A knock may push the object off each finger once (a true contact loss, reacquired);
+  // sensing faults may not lose a true contact.
+  const auto knocks = std::count_if(spec.faults.begin(), spec.faults.end(), [](const FaultSpec& f) {
+    return f.kind == FaultSpec::Kind::knock;
+  });
+  all.max_contact_losses = static_cast<long long>(kFingers) * knocks;
   e.stages.push_back(all);
   for (const StageSpec& st : spec.stages) {
     examples::StageExpectation s;
@@ -92,7 +99,44 @@ inline examples::RunSummary run_summary(const ScenarioSpec& spec, const Scenario
   if (r.link_contacts > 0)
     s.violations.push_back("a finger link (no tactile sensing) touched the object " +
                            std::to_string(r.link_contacts) + " time(s)");
+  // Every injected fault must be reported by the controller, and a dropout or a knock
+  // followed by the reacquisition of the contact (the bounds on the tick counts are the
+  // tests', tests/box2d/planar_scenarios.cpp).
+  for (std::size_t i = 0; i < r.faults.size() && i < spec.faults.size(); ++i) {
+    const FaultReport& f = r.faults[i];
+    const std::string what = std::string("fault ") + to_string(f.kind) + " (" +
+                             spec.faults[i].stage + ", finger " + std::to_string(f.finger) + ")";
+    if (f.start_time < 0.0)
+      s.violations.push_back(what + " was never injected");
+    else if (f.detection_ticks < 0)
+      s.violations.push_back(what + " was not reported by the controller");
+    else if ((f.kind == FaultSpec::Kind::tactile_dropout || f.kind == FaultSpec::Kind::knock) &&
+             f.reacquire_ticks < 0)
+      s.violations.push_back(what + ": the contact was not reacquired");
+  }
   return s;
+}
+
+/// The fault reports as JSON (ticks of the 1 ms control period; -1: never).
+inline examples::Json faults_json(const ScenarioSpec& spec, const ScenarioResult& r) {
+  examples::Json a = examples::Json::array();
+  for (std::size_t i = 0; i < r.faults.size() && i < spec.faults.size(); ++i) {
+    const FaultSpec& fs = spec.faults[i];
+    const FaultReport& f = r.faults[i];
+    a.push_back({{"kind", to_string(f.kind)},
+                 {"stage", fs.stage},
+                 {"at_s", fs.at},
+                 {"duration_s", fs.duration},
+                 {"finger", f.finger},
+                 {"magnitude_N", fs.magnitude},
+                 {"vector", {fs.vector.x(), fs.vector.y()}},
+                 {"start_time_s", f.start_time},
+                 {"detection_ticks", f.detection_ticks},
+                 {"reacquire_ticks", f.reacquire_ticks},
+                 {"reported_ticks", f.reported_ticks},
+                 {"max_force_integral_Ns", f.max_force_integral}});
+  }
+  return a;
 }
 
 /// The summary document: common/summary_json.hpp plus the plant, its units and the
@@ -113,6 +157,14 @@ inline examples::Json summary_document(const ScenarioSpec& spec, const ScenarioR
   j["control_period_s"] = spec.controller.control_period;
   j["box2d_substeps"] = spec.world.substeps;
   j["link_contacts"] = r.link_contacts;
+  if (!spec.faults.empty()) {
+    const auto& g = spec.controller.outlier_gates;
+    j["outlier_gates"] = {{"max_object_speed_u_per_s", g.max_object_speed},
+                          {"max_object_angular_speed_rad_per_s", g.max_object_angular_speed},
+                          {"max_force_rate_N_per_s", g.max_force_rate},
+                          {"max_consecutive_rejections", g.max_consecutive_rejections}};
+    j["faults"] = faults_json(spec, r);
+  }
   return j;
 }
 

@@ -11,10 +11,18 @@
 //   all        no drop, no contact loss (true contacts and as the controller senses them),
 //              no finger link touching the object, |f - f_desired| <= 0.1 N after the grasp
 // and the negative case: a finger commanded away drops the object and the same checks fail.
+// Fault injection (box, gravity; grasp, hold, translate_x; outlier gates on; the fault 1 s
+// into translate_x): a 50 ms tactile dropout, a +3 N force spike for 4 ms, a 1 u pose
+// outlier for 3 ms, a 3 N knock for 10 ms. Each: no drop, the fault reported within a few
+// ticks, the contact back (dropout, knock), the force integral bounded, the stage's bounds
+// held, no gate rejection outside the fault; and, with the gates off, the pose outlier
+// and the force spike go unreported and disturb the object / the force servo.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -232,6 +240,189 @@ TEST(NegativeCase, FingerCommandedAwayDropsTheObjectAndTheChecksFail) {
   as_shipped.expect_drop = false;
   EXPECT_FALSE(b2d::run_summary(as_shipped, r).passed());
   EXPECT_TRUE(b2d::run_summary(spec, r).passed());
+}
+
+// ---- fault injection -----------------------------------------------------------------
+
+using Kind = b2d::FaultSpec::Kind;
+
+struct FaultRun {
+  b2d::ScenarioResult r;
+  long gate_warnings_outside = 0;  ///< pose/force outlier warnings away from the fault
+  long gate_warnings_inside = 0;
+  double max_speed = 0.0;  ///< u/s, true object speed after the grasp
+};
+
+/// Runs `spec` (one fault); counts the gates' warnings outside the fault window and the
+/// 50 ms after it (which a knock's real motion may trigger), and inside.
+FaultRun run_fault(const b2d::ScenarioSpec& spec) {
+  FaultRun f;
+  const b2d::FaultSpec& fs = spec.faults.at(0);
+  f.r = b2d::ScenarioRunner{}.run(spec, [&](const b2d::TickRecord& rec) {
+    const b2d::StageSpec& st = spec.stages[static_cast<std::size_t>(rec.stage)];
+    if (st.kind == b2d::StageKind::grasp) return;
+    const bool gate = inhand::has(rec.output->warnings, inhand::ControllerWarning::pose_outlier) ||
+                      inhand::has(rec.output->warnings, inhand::ControllerWarning::force_outlier);
+    const double ts = rec.stage_time;  // end of the tick
+    const bool near = st.name == fs.stage && ts > fs.at && ts <= fs.at + fs.duration + 0.05;
+    (near ? f.gate_warnings_inside : f.gate_warnings_outside) += gate ? 1 : 0;
+    f.max_speed = std::max(f.max_speed, rec.world->object_velocity().norm());
+  });
+  return f;
+}
+
+/// Bounds of one fault run, set from measured figures with some headroom.
+struct FaultBounds {
+  long max_detection_ticks = 2;
+  long max_reacquire_ticks = -1;           ///< -1: no reacquisition expected (none measured)
+  double max_force_integral = 1e-3;        ///< N s
+  double max_stage_position_error = 2e-3;  ///< u, peak error of translate_x
+  int max_contact_losses = 0;              ///< true contacts
+};
+
+/// What every fault run is held to; returns the fault's report.
+b2d::FaultReport check_fault_run(const b2d::ScenarioSpec& spec, const FaultRun& f,
+                                 const FaultBounds& b) {
+  const b2d::ScenarioResult& r = f.r;
+  EXPECT_TRUE(r.failure.empty()) << r.failure;
+  EXPECT_EQ(r.stages.size(), 3u);
+  EXPECT_TRUE(stage(r, "grasp").completed);
+  EXPECT_FALSE(r.dropped);
+  EXPECT_LE(r.contact_losses, b.max_contact_losses);
+  EXPECT_EQ(r.link_contacts, 0);
+  // The stage the fault hit keeps the shipped scenarios' bounds.
+  const auto& m = stage(r, "translate_x");
+  EXPECT_LE(m.rms_position_error, 0.10 * kAmplitude);
+  EXPECT_LE(m.final_position_error, 0.05 * kAmplitude);
+  EXPECT_LE(m.max_position_error, b.max_stage_position_error);
+  EXPECT_LE(stage(r, "hold").final_position_error, 0.02 * spec.object.size());
+  // The gates never reject a sample away from the fault.
+  EXPECT_EQ(f.gate_warnings_outside, 0);
+  EXPECT_TRUE(b2d::run_summary(spec, r).passed());
+  for (const auto& v : b2d::run_summary(spec, r).violations) ADD_FAILURE() << v;
+
+  EXPECT_EQ(r.faults.size(), 1u);
+  if (r.faults.size() != 1u) return {};
+  const b2d::FaultReport& fr = r.faults[0];
+  const double dt = spec.controller.control_period;
+  EXPECT_NEAR(fr.start_time, m.start_time + spec.faults[0].at, 1.5 * dt);  // injected on time
+  EXPECT_GE(fr.detection_ticks, 0);
+  EXPECT_LE(fr.detection_ticks, b.max_detection_ticks);
+  if (b.max_reacquire_ticks >= 0) {
+    EXPECT_GE(fr.reacquire_ticks, 0);
+    EXPECT_LE(fr.reacquire_ticks, b.max_reacquire_ticks);
+  }
+  EXPECT_LE(fr.max_force_integral, b.max_force_integral);
+  record("detection_ticks", static_cast<double>(fr.detection_ticks));
+  record("reacquire_ticks", static_cast<double>(fr.reacquire_ticks));
+  record("reported_ticks", static_cast<double>(fr.reported_ticks));
+  record("max_force_integral_Ns", fr.max_force_integral);
+  record("translate_x_rms_position_error_u", m.rms_position_error);
+  record("translate_x_max_position_error_u", m.max_position_error);
+  record("translate_x_final_position_error_u", m.final_position_error);
+  record("contact_losses", r.contact_losses);
+  return fr;
+}
+
+// Finger 1's tactile signal reads "not touching" for 50 ms: the finger is reported
+// reacquiring at once, for the whole window, and in contact again right after it.
+// Measured: detection 0 ticks, reacquired 0 ticks after the window, 50 ticks reported,
+// max |force integral| 0.028 N s, translate_x peak error 0.040 u (RMS 0.0059 u).
+TEST(Fault, TactileDropoutIsReportedAndTheFingerReacquires) {
+  const b2d::ScenarioSpec spec = b2d::fault_scenario(Kind::tactile_dropout);
+  const FaultRun f = run_fault(spec);
+  FaultBounds b;
+  b.max_reacquire_ticks = 10;
+  b.max_force_integral = 0.05;
+  b.max_stage_position_error = 0.08;
+  const b2d::FaultReport fr = check_fault_run(spec, f, b);
+  const long window = std::lround(spec.faults[0].duration / spec.controller.control_period);
+  EXPECT_GE(fr.reported_ticks, window);  // reacquiring for as long as the signal is out
+  EXPECT_LE(fr.reported_ticks, window + 10);
+}
+
+// +3 N on finger 0's sensed force for 4 ms: the force gate (200 N/s) rejects it on every
+// tick. Measured: detection 0, 4 ticks rejected, max |force integral| 1.2e-4 N s (as
+// without the fault), translate_x peak error 4.5e-4 u.
+TEST(Fault, ForceSpikeIsRejectedByTheForceGate) {
+  const b2d::ScenarioSpec spec = b2d::fault_scenario(Kind::force_spike);
+  const FaultRun f = run_fault(spec);
+  const b2d::FaultReport fr = check_fault_run(spec, f, FaultBounds{});
+  EXPECT_GE(fr.reported_ticks, 1);
+  EXPECT_LE(fr.reported_ticks, spec.controller.outlier_gates.max_consecutive_rejections + 1);
+}
+
+// The sensed object position jumps 1 u (1 cm) along x for 3 ms: the pose gate (20 u/s)
+// rejects it. Measured: detection 0, 3 ticks rejected, max |force integral| 1.2e-4 N s,
+// translate_x peak error 4.6e-4 u.
+TEST(Fault, PoseOutlierIsRejectedByThePoseGate) {
+  const b2d::ScenarioSpec spec = b2d::fault_scenario(Kind::pose_outlier);
+  const FaultRun f = run_fault(spec);
+  const b2d::FaultReport fr = check_fault_run(spec, f, FaultBounds{});
+  EXPECT_GE(fr.reported_ticks, 1);
+  EXPECT_LE(fr.reported_ticks, spec.controller.outlier_gates.max_consecutive_rejections + 1);
+}
+
+// 3 N along +x on the object for 10 ms (0.03 N s): finger 0's pad loses the object, the
+// controller reports contact_lost and the finger comes back. Measured: detection 6 ticks,
+// all contacts back 11 ticks after the window, max |force integral| 0.022 N s, one true
+// contact loss, translate_x peak error 0.18 u (RMS 0.012 u, final 1.5e-6 u), peak
+// object speed 22 u/s.
+TEST(Fault, KnockLosesAContactThatIsReportedAndReacquired) {
+  const b2d::ScenarioSpec spec = b2d::fault_scenario(Kind::knock);
+  const FaultRun f = run_fault(spec);
+  FaultBounds b;
+  b.max_detection_ticks = 10;
+  b.max_reacquire_ticks = 25;
+  b.max_force_integral = 0.04;
+  b.max_stage_position_error = 0.3;
+  b.max_contact_losses = 2;
+  check_fault_run(spec, f, b);
+  // The knock did push the object (it was applied): well beyond the unfaulted 5e-4 u.
+  EXPECT_GE(stage(f.r, "translate_x").max_position_error, 0.05);
+  EXPECT_GE(f.r.contact_losses, 1);
+  record("max_object_speed_u_per_s", f.max_speed);
+}
+
+// The negative checks: with the gates off (the library's default, +inf), the same pose
+// outlier and force spike are NOT reported, so the detection above is the gates' doing,
+// and the corrupted samples reach the loop. Measured without gates: pose outlier ->
+// translate_x peak error 0.021 u (4.6e-4 u gated); force spike -> max |force integral|
+// 0.0115 N s (1.2e-4 N s gated), peak error 0.016 u.
+TEST(Fault, WithoutGatesTheOutliersAreNotReportedAndDisturbTheLoop) {
+  b2d::ScenarioSpec pose = b2d::fault_scenario(Kind::pose_outlier);
+  pose.controller.outlier_gates = inhand::OutlierGates<double>{};
+  const FaultRun p = run_fault(pose);
+  ASSERT_EQ(p.r.faults.size(), 1u);
+  EXPECT_GE(p.r.faults[0].start_time, 0.0);  // injected
+  EXPECT_EQ(p.r.faults[0].detection_ticks, -1);
+  EXPECT_EQ(p.r.faults[0].reported_ticks, 0);
+  EXPECT_GE(stage(p.r, "translate_x").max_position_error, 0.01);
+  EXPECT_FALSE(b2d::run_summary(pose, p.r).passed());  // "not reported" is a violation
+  record("ungated_pose_outlier_translate_x_max_position_error_u",
+         stage(p.r, "translate_x").max_position_error);
+
+  b2d::ScenarioSpec spike = b2d::fault_scenario(Kind::force_spike);
+  spike.controller.outlier_gates = inhand::OutlierGates<double>{};
+  const FaultRun s = run_fault(spike);
+  ASSERT_EQ(s.r.faults.size(), 1u);
+  EXPECT_EQ(s.r.faults[0].detection_ticks, -1);
+  EXPECT_GE(s.r.faults[0].max_force_integral, 5e-3);
+  record("ungated_force_spike_max_force_integral_Ns", s.r.faults[0].max_force_integral);
+  record("ungated_force_spike_translate_x_max_position_error_u",
+         stage(s.r, "translate_x").max_position_error);
+}
+
+TEST(Fault, InvalidFaultSpecificationsAreRejected) {
+  b2d::ScenarioSpec spec = b2d::fault_scenario(Kind::tactile_dropout);
+  spec.faults[0].stage = "rotate";  // not a stage of this scenario
+  EXPECT_THROW(b2d::ScenarioRunner{}.run(spec), std::invalid_argument);
+  spec = b2d::fault_scenario(Kind::tactile_dropout);
+  spec.faults[0].finger = b2d::kFingers;
+  EXPECT_THROW(b2d::ScenarioRunner{}.run(spec), std::invalid_argument);
+  spec = b2d::fault_scenario(Kind::knock);
+  spec.faults[0].duration = -0.01;
+  EXPECT_THROW(b2d::ScenarioRunner{}.run(spec), std::invalid_argument);
 }
 
 // The controller's FingerChain is the Box2D finger: forward kinematics from the joint
