@@ -263,6 +263,8 @@ int run_scenario(const Options& o) {
   summary.stages = result.stages;
   summary.failure = result.failure;
   summary.violations = ex::check_expectations(sf.expect, result.stages);
+  for (std::string& v : ex::check_fault_expectations(sf.fault_expect, result.faults))
+    summary.violations.push_back(std::move(v));
   try {
     // Both files are complete before either appears.
     std::unique_ptr<ex::AtomicFile> summary_file;

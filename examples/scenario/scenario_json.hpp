@@ -27,9 +27,23 @@
 
 namespace inhand::examples {
 
+/// Bounds on what the controller made of one injected fault (the fault's optional
+/// "expect" object), checked against plant::FaultReport after the run.
+struct FaultExpectation {
+  /// Ticks from the fault's start until the controller reported it (a fault never
+  /// reported violates any bound).
+  std::optional<long long> max_detection_ticks;
+  /// Dropout / knock: ticks after the fault window until every finger touched again
+  /// (never is a violation).
+  std::optional<long long> max_reacquire_ticks;
+  /// Largest |force integral| of any finger's servo from the fault's start [N s].
+  std::optional<double> max_force_integral;
+};
+
 struct ScenarioFile {
   plant::ScenarioSpec spec;
   Expectations expect;
+  std::vector<FaultExpectation> fault_expect;  ///< one per spec.faults entry
   std::string hand_preset;  ///< "shadow_like" or "three_finger"
   std::string description;
 };
@@ -263,8 +277,19 @@ inline plant::StageSpec read_stage(ObjectReader r, std::size_t index) {
   return st;
 }
 
+inline FaultExpectation read_fault_expectation(ObjectReader r) {
+  FaultExpectation e;
+  if (r.has("max_detection_ticks"))
+    e.max_detection_ticks = r.integer("max_detection_ticks", 0, 0, 100000000);
+  if (r.has("max_reacquire_ticks"))
+    e.max_reacquire_ticks = r.integer("max_reacquire_ticks", 0, 0, 100000000);
+  e.max_force_integral = r.optional_number("max_force_integral", Range::non_negative_up_to(1e6));
+  r.finish();
+  return e;
+}
+
 inline plant::FaultSpec read_fault(ObjectReader r, const std::vector<std::string>& stage_names,
-                                   int fingers) {
+                                   int fingers, FaultExpectation& expect) {
   using Kind = plant::FaultSpec::Kind;
   plant::FaultSpec f;
   const std::string kind = r.choice(
@@ -288,6 +313,7 @@ inline plant::FaultSpec read_fault(ObjectReader r, const std::vector<std::string
     f.vector = vec3(r.numbers("vector", {0, 0, 0}, 3, Range::closed(-1.0, 1.0)));
   if (f.kind == Kind::knock)  // N
     f.vector = vec3(r.numbers("vector", {0, 0, 0}, 3, Range::closed(-1000.0, 1000.0)));
+  if (r.has("expect")) expect = read_fault_expectation(r.object("expect"));
   r.finish();
   return f;
 }
@@ -373,9 +399,12 @@ inline ScenarioFile parse_scenario(const Json& j) {
                                   Range::format_number(scenario_detail::kMaxScenarioTime) + " s");
   const Json& faults = r.array("faults", false);
   if (faults.size() > 100) throw JsonError("faults", "at most 100 faults");
-  for (std::size_t i = 0; i < faults.size(); ++i)
+  for (std::size_t i = 0; i < faults.size(); ++i) {
+    out.fault_expect.emplace_back();
     s.faults.push_back(scenario_detail::read_fault(ObjectReader(faults[i], index_path("faults", i)),
-                                                   names, static_cast<int>(s.hand.fingers.size())));
+                                                   names, static_cast<int>(s.hand.fingers.size()),
+                                                   out.fault_expect.back()));
+  }
   if (const Json* e = r.raw("expect")) out.expect = parse_expectations(*e, "expect", names);
   r.finish();
 
@@ -386,6 +415,32 @@ inline ScenarioFile parse_scenario(const Json& j) {
   if (!v.ok()) throw JsonError(scenario_detail::plant_field_path(v.field), v.reason);
   v = plant::HandController::validate(plant::controller_config_for(s.hand, s.controller));
   if (!v.ok()) throw JsonError(scenario_detail::controller_field_path(v.field), v.reason);
+  return out;
+}
+
+/// Human-readable violations of the faults' "expect" bounds by the run's fault reports
+/// (same order as the file's "faults"); empty when all hold.
+inline std::vector<std::string> check_fault_expectations(const std::vector<FaultExpectation>& expect,
+                                                         const std::vector<plant::FaultReport>& reports) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < expect.size() && i < reports.size(); ++i) {
+    const FaultExpectation& e = expect[i];
+    const plant::FaultReport& r = reports[i];
+    const std::string who = "fault " + std::to_string(i) + " (" + plant::to_string(r.kind) + ")";
+    const auto check_ticks = [&](const char* what, long ticks, const std::optional<long long>& bound) {
+      if (!bound) return;
+      if (ticks < 0)
+        out.push_back(who + ": " + what + " never happened (bound " + std::to_string(*bound) + " ticks)");
+      else if (ticks > *bound)
+        out.push_back(who + ": " + what + " after " + std::to_string(ticks) + " ticks exceeds " +
+                      std::to_string(*bound));
+    };
+    check_ticks("detection", r.detection_ticks, e.max_detection_ticks);
+    check_ticks("reacquisition", r.reacquire_ticks, e.max_reacquire_ticks);
+    if (e.max_force_integral && !(r.max_force_integral <= *e.max_force_integral))
+      out.push_back(who + ": max |force integral| " + detail::fmt(r.max_force_integral) + " N s exceeds " +
+                    detail::fmt(*e.max_force_integral) + " N s");
+  }
   return out;
 }
 

@@ -158,7 +158,8 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   j["tolerances"] = ex::parse_json_text(
       R"({"drop_distance": 0.03, "settle_position_tolerance": 1e-3, "settle_orientation_tolerance": 0.02})");
   j["faults"] = ex::parse_json_text(R"([
-      {"kind": "tactile_dropout", "stage": "hold", "at": 0.5, "duration": 0.1, "finger": 2},
+      {"kind": "tactile_dropout", "stage": "hold", "at": 0.5, "duration": 0.1, "finger": 2,
+       "expect": {"max_detection_ticks": 3, "max_reacquire_ticks": 400, "max_force_integral": 0.25}},
       {"kind": "force_spike", "stage": "manipulate", "at": 1.0, "duration": 0.01, "finger": 1, "magnitude": 3},
       {"kind": "pose_outlier", "stage": "manipulate", "vector": [0.01, 0, 0]},
       {"kind": "knock", "stage": "hold", "at": 1.5, "duration": 0.02, "vector": [0, 0, 2]},
@@ -207,6 +208,11 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   EXPECT_EQ(s.faults[0].at, 0.5);
   EXPECT_EQ(s.faults[0].duration, 0.1);
   EXPECT_EQ(s.faults[0].finger, 2);
+  ASSERT_EQ(f.fault_expect.size(), 5u);
+  EXPECT_EQ(f.fault_expect[0].max_detection_ticks, 3);
+  EXPECT_EQ(f.fault_expect[0].max_reacquire_ticks, 400);
+  EXPECT_EQ(f.fault_expect[0].max_force_integral, 0.25);
+  EXPECT_FALSE(f.fault_expect[1].max_detection_ticks.has_value());
   EXPECT_EQ(s.faults[1].kind, FK::force_spike);
   EXPECT_EQ(s.faults[1].magnitude, 3);
   EXPECT_EQ(s.faults[2].kind, FK::pose_outlier);
@@ -607,6 +613,16 @@ TEST(ScenarioJson, RejectsBadValuesNamingTheKey) {
          j["faults"] = {{{"kind", "tactile_dropout"}, {"magnitude", 1.0}}};
        },
        {"faults[0].magnitude", "unknown key"}},
+      {"unknown fault expectation",
+       [](Json& j) {
+         j["faults"] = {{{"kind", "knock"}, {"expect", {{"max_detection_time", 1}}}}};
+       },
+       {"faults[0].expect.max_detection_time", "unknown key"}},
+      {"negative fault detection bound",
+       [](Json& j) {
+         j["faults"] = {{{"kind", "knock"}, {"expect", {{"max_detection_ticks", -1}}}}};
+       },
+       {"faults[0].expect.max_detection_ticks"}},
       {"unknown fault kind",
        [](Json& j) {
          j["faults"] = {{{"kind", "earthquake"}}};
@@ -632,6 +648,37 @@ TEST(ScenarioJson, RejectsBadValuesNamingTheKey) {
     for (const char* s : c.message_contains)
       EXPECT_NE(msg.find(s), std::string::npos) << "message: " << msg;
   }
+}
+
+// The fault bounds of a scenario file are checked against what the run reported:
+// late, never and within the bound.
+TEST(ScenarioJson, FaultExpectationsAreChecked) {
+  ex::FaultExpectation e;
+  e.max_detection_ticks = 2;
+  e.max_reacquire_ticks = 100;
+  e.max_force_integral = 0.5;
+  ip::FaultReport r;
+  r.kind = ip::FaultSpec::Kind::tactile_dropout;
+  r.detection_ticks = 2;
+  r.reacquire_ticks = 100;
+  r.max_force_integral = 0.5;
+  EXPECT_TRUE(ex::check_fault_expectations({e}, {r}).empty());
+  ip::FaultReport late = r;
+  late.detection_ticks = 3;
+  std::vector<std::string> v = ex::check_fault_expectations({e}, {late});
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_NE(v[0].find("detection after 3 ticks exceeds 2"), std::string::npos) << v[0];
+  ip::FaultReport never = r;
+  never.detection_ticks = -1;
+  never.reacquire_ticks = -1;
+  never.max_force_integral = 0.51;
+  v = ex::check_fault_expectations({e}, {never});
+  ASSERT_EQ(v.size(), 3u);
+  EXPECT_NE(v[0].find("detection never happened"), std::string::npos) << v[0];
+  EXPECT_NE(v[1].find("reacquisition never happened"), std::string::npos) << v[1];
+  EXPECT_NE(v[2].find("force integral"), std::string::npos) << v[2];
+  // No bounds: nothing to violate.
+  EXPECT_TRUE(ex::check_fault_expectations({ex::FaultExpectation{}}, {never}).empty());
 }
 
 TEST(ScenarioJson, RejectsMalformedText) {
