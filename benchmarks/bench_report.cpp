@@ -22,6 +22,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -49,6 +50,23 @@ std::string fmt(double v, int decimals = 1) {
   return buf;
 }
 
+/// A numeric field, or `fallback` when absent or null (non-finite values were turned
+/// into null by read_benchmark_json).
+double number(const nlohmann::json& b, const char* key, double fallback) {
+  const auto it = b.find(key);
+  return it != b.end() && it->is_number() ? it->get<double>() : fallback;
+}
+
+/// Google Benchmark writes non-finite statistics as bare NaN / inf (e.g. the
+/// coefficient of variation of a counter that is 0 in every repetition), which is not
+/// JSON; they are read as null.
+nlohmann::json read_benchmark_json(std::istream& in) {
+  std::stringstream text;
+  text << in.rdbuf();
+  static const std::regex non_finite(R"((:\s*)-?(NaN|nan|inf|Infinity)\b)");
+  return nlohmann::json::parse(std::regex_replace(text.str(), non_finite, "$1null"));
+}
+
 class Report {
  public:
   explicit Report(const nlohmann::json& j) : json_(j) {
@@ -64,8 +82,8 @@ class Report {
         f.error = true;
         continue;
       }
-      const double t = to_ns(b.value("real_time", NAN), b.value("time_unit", std::string("ns")));
-      const double allocs = b.value("allocs_per_tick", 0.0);
+      const double t = to_ns(number(b, "real_time", NAN), b.value("time_unit", std::string("ns")));
+      const double allocs = number(b, "allocs_per_tick", 0.0);
       if (b.value("run_type", std::string()) == "aggregate") {
         const std::string agg = b.value("aggregate_name", std::string());
         if (agg == "mean") f.mean = t;
@@ -182,7 +200,7 @@ int main(int argc, char** argv) {
   try {
     std::ifstream in(argv[1]);
     if (!in) throw std::runtime_error(std::string("cannot open ") + argv[1]);
-    in >> j;
+    j = read_benchmark_json(in);
     if (!j.contains("benchmarks") || !j.contains("context")) throw std::runtime_error("not a Google Benchmark JSON file");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "inhand_bench_report: %s\n", e.what());

@@ -3,7 +3,8 @@
 #
 # Keep this the ONE list of system dependencies. Eigen is the library's only
 # dependency; the rest serve the tests (GoogleTest, Orocos KDL as a reference),
-# benchmarks, examples (Box2D, JSON, CLI11), plots (gnuplot) and the build itself.
+# benchmarks, examples (Box2D, JSON, CLI11), plots (gnuplot), the robustness stages
+# (valgrind, clang with libFuzzer) and the build itself.
 
 INHAND_PACKAGES=(
   # build tools
@@ -23,6 +24,10 @@ INHAND_PACKAGES=(
   nlohmann-json3-dev
   libcli11-dev
   gnuplot-nox
+  # robustness stages of scripts/test and scripts/fuzz: memcheck, clang + libFuzzer
+  valgrind
+  clang-14
+  libclang-rt-14-dev
 )
 
 # Prints the packages of INHAND_PACKAGES that are not installed, one per line.

@@ -58,7 +58,8 @@ struct TrajectorySegment {
     s.displacement.template tail<SpatialDim<Dim>::kRot>() = radians * axis.normalized();
     return s;
   }
-  /// Go to `displacement` and back, `cycles` times, each cycle taking `seconds`.
+  /// Go to `displacement` and back `n` times; `seconds` is the duration of the whole
+  /// segment (all n cycles), so each cycle takes seconds / n.
   static TrajectorySegment reciprocate(const Twist<Scalar, Dim>& displacement, Scalar seconds,
                                        int n = 1) noexcept {
     TrajectorySegment s;
