@@ -43,10 +43,12 @@ class ControllerFixture {
     for (int i = 0; i < n; ++i) {
       const auto k = static_cast<std::size_t>(i);
       cfg.fingers[k].chain = convert_chain<typename Ctrl::Chain, Dim>(hand.fingers[k]);
-      cfg.fingers[k].role = i == hand.thumb ? inhand::FingerRole::balancing : inhand::FingerRole::preset;
+      cfg.fingers[k].role =
+          i == hand.thumb ? inhand::FingerRole::balancing : inhand::FingerRole::preset;
     }
     const inhand::Validation v = ctrl_.configure(cfg);
-    if (!v.ok()) throw std::invalid_argument(std::string("configure: ") + v.field + ": " + v.reason);
+    if (!v.ok())
+      throw std::invalid_argument(std::string("configure: ") + v.field + ": " + v.reason);
 
     // Grasp: each finger touches at its nominal contact with the nominal force.
     const S f0 = cfg.force_planner.nominal_force;
@@ -71,7 +73,8 @@ class ControllerFixture {
     inhand::Twist<S, Dim> d = inhand::Twist<S, Dim>::Zero();
     d(0) = S(0.005);
     constexpr int kCycles = 100000;
-    if (!trajectory_.append(inhand::TrajectorySegment<S, Dim>::reciprocate(d, S(4 * kCycles), kCycles)))
+    if (!trajectory_.append(
+            inhand::TrajectorySegment<S, Dim>::reciprocate(d, S(4 * kCycles), kCycles)))
       throw std::logic_error("trajectory");
 
     for (const HandSample<Dim>& s : random_hand_samples<Dim>(hand, seed)) {
@@ -94,9 +97,11 @@ class ControllerFixture {
     for (int k = 0; k < kSamples; ++k) {
       const inhand::ControllerStatus st = tick();
       if (st != inhand::ControllerStatus::ok)
-        throw std::runtime_error(std::string("manipulation tick returned ") + inhand::to_string(st));
+        throw std::runtime_error(std::string("manipulation tick returned ") +
+                                 inhand::to_string(st));
       for (const auto& fo : out_.fingers)
-        if (fo.state != inhand::FingerState::in_contact) throw std::runtime_error("a finger is not in contact");
+        if (fo.state != inhand::FingerState::in_contact)
+          throw std::runtime_error("a finger is not in contact");
     }
     restart();
   }
@@ -122,7 +127,8 @@ class ControllerFixture {
       grasp_input_.time = static_cast<S>(clock_);
       st = ctrl_.update(grasp_input_, out_);
     }
-    if (st != inhand::ControllerStatus::grasped) throw std::runtime_error("the grasp did not complete");
+    if (st != inhand::ControllerStatus::grasped)
+      throw std::runtime_error("the grasp did not complete");
     if (!ctrl_.start_manipulation(trajectory_).ok()) throw std::runtime_error("start_manipulation");
   }
 
@@ -140,15 +146,16 @@ template <typename S, int Dim, int NumFingers, int Dof, int MaxDof = Dof>
 void add_controller(const std::string& area, const std::string& label, const std::string& storage,
                     const HandDef<Dim>& hand) {
   using Ctrl = inhand::ReactiveController<S, Dim, NumFingers, Dof, MaxDof>;
-  add<ControllerFixture<Ctrl>>(area + "/" + label + "/" + scalar_name<S>() + "/" + storage, true, hand,
-                               std::uint64_t{505});
+  add<ControllerFixture<Ctrl>>(area + "/" + label + "/" + scalar_name<S>() + "/" + storage, true,
+                               hand, std::uint64_t{505});
 }
 
 /// fixed (only for hands whose fingers share one DOF), bounded and dynamic storage.
 template <typename S, int Dim, int NumFingers, int UniformDof>
 void add_controller_grid(const HandDef<Dim>& hand) {
   constexpr int kCapacity = Dim == 2 ? 3 : 5;
-  if constexpr (UniformDof != Dynamic) add_controller<S, Dim, NumFingers, UniformDof>("controller", hand.name, "fixed", hand);
+  if constexpr (UniformDof != Dynamic)
+    add_controller<S, Dim, NumFingers, UniformDof>("controller", hand.name, "fixed", hand);
   add_controller<S, Dim, NumFingers, Dynamic, kCapacity>("controller", hand.name, "bounded", hand);
   add_controller<S, Dim, Dynamic, Dynamic, Dynamic>("controller", hand.name, "dynamic", hand);
 }
@@ -167,7 +174,8 @@ template <int N>
 void add_scaling() {
   const HandDef<3> hand = four_dof_hand(N);
   add_controller<double, 3, N, 4>("scaling", std::to_string(N), "fixed", hand);
-  add_controller<double, 3, Dynamic, Dynamic, Dynamic>("scaling", std::to_string(N), "dynamic", hand);
+  add_controller<double, 3, Dynamic, Dynamic, Dynamic>("scaling", std::to_string(N), "dynamic",
+                                                       hand);
 }
 
 }  // namespace

@@ -70,7 +70,8 @@ class SolveFloorFixture {
     const double l11 = std::sqrt(G(1, 1) - l10 * l10), i11 = 1.0 / l11;
     const double l21 = (G(2, 1) - l20 * l10) * i11;
     const double l22 = std::sqrt(G(2, 2) - l20 * l20 - l21 * l21), i22 = 1.0 / l22;
-    const double y0 = b(0) * i00, y1 = (b(1) - l10 * y0) * i11, y2 = (b(2) - l20 * y0 - l21 * y1) * i22;
+    const double y0 = b(0) * i00, y1 = (b(1) - l10 * y0) * i11,
+                 y2 = (b(2) - l20 * y0 - l21 * y1) * i22;
     const double z2 = y2 * i22, z1 = (y1 - l21 * z2) * i11, z0 = (y0 - l10 * z1 - l20 * z2) * i00;
     x_.noalias() = J.transpose() * Eigen::Vector3d(z0, z1, z2);
     return x_(0);
@@ -133,10 +134,11 @@ class FingerFixture {
 };
 
 template <typename S, int Dof, int MaxDof>
-void add_finger(const std::string& label, const std::string& storage, const HandDef<3>& hand, int finger) {
+void add_finger(const std::string& label, const std::string& storage, const HandDef<3>& hand,
+                int finger) {
   using Chain = inhand::FingerChain<S, 3, Dof, MaxDof>;
-  add<FingerFixture<Chain>>("finger/" + label + "/" + scalar_name<S>() + "/" + storage, true, hand, finger,
-                            std::uint64_t{404});
+  add<FingerFixture<Chain>>("finger/" + label + "/" + scalar_name<S>() + "/" + storage, true, hand,
+                            finger, std::uint64_t{404});
 }
 
 }  // namespace

@@ -56,10 +56,10 @@ class IkFixture {
 };
 
 template <typename S, int Dim, int Dof, int MaxDof>
-void add_ik(const std::string& label, const std::string& storage, const HandDef<Dim>& hand, int finger,
-            Conditioning mode) {
-  add<IkFixture<S, Dim, Dof, MaxDof>>("ik/" + label + "/" + scalar_name<S>() + "/" + storage, true, hand,
-                                      finger, mode, std::uint64_t{202});
+void add_ik(const std::string& label, const std::string& storage, const HandDef<Dim>& hand,
+            int finger, Conditioning mode) {
+  add<IkFixture<S, Dim, Dof, MaxDof>>("ik/" + label + "/" + scalar_name<S>() + "/" + storage, true,
+                                      hand, finger, mode, std::uint64_t{202});
 }
 
 /// double and float with fixed sizes; with `all_storage` also double bounded and dynamic.

@@ -22,7 +22,6 @@
 #include <kdl/chainfksolverpos_recursive.hpp>
 #include <kdl/chainiksolvervel_pinv.hpp>
 #include <kdl/chainjnttojacsolver.hpp>
-
 #include <memory>
 
 #include "bench_support.hpp"
@@ -33,9 +32,9 @@ namespace {
 KDL::Vector to_kdl(const Eigen::Vector3d& v) { return KDL::Vector(v.x(), v.y(), v.z()); }
 KDL::Frame to_kdl(const inhand::Pose<double, 3>& p) {
   const Eigen::Matrix3d& R = p.rotation;
-  return KDL::Frame(
-      KDL::Rotation(R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2)),
-      to_kdl(p.position));
+  return KDL::Frame(KDL::Rotation(R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0),
+                                  R(2, 1), R(2, 2)),
+                    to_kdl(p.position));
 }
 
 /// Segment 0 places the base; segment i holds joint i (origin and axis in the previous
@@ -49,8 +48,9 @@ KDL::Chain to_kdl_chain(const RefChain<3>& chain) {
     const Eigen::Vector3d axis_in_parent = p.rotation * j.axis;
     const inhand::Pose<double, 3> tip = i + 1 == chain.dof() ? p * chain.joint_to_tip : p;
     const std::string name = "joint" + std::to_string(i);
-    k.addSegment(KDL::Segment(name, KDL::Joint(name, to_kdl(p.position), to_kdl(axis_in_parent), KDL::Joint::RotAxis),
-                              to_kdl(tip)));
+    k.addSegment(KDL::Segment(
+        name, KDL::Joint(name, to_kdl(p.position), to_kdl(axis_in_parent), KDL::Joint::RotAxis),
+        to_kdl(tip)));
   }
   return k;
 }
@@ -78,10 +78,13 @@ class KdlFinger {
       inhand::forward_kinematics(chain, s.q, ws);
       inhand::point_jacobian(ws, s.contact, J);
       run(q_.size() - 1);
-      double err = (Eigen::Vector3d(tip_.p.x(), tip_.p.y(), tip_.p.z()) - ws.fingertip.position).norm();
+      double err =
+          (Eigen::Vector3d(tip_.p.x(), tip_.p.y(), tip_.p.z()) - ws.fingertip.position).norm();
       for (int c = 0; c < chain.dof(); ++c)
         for (int r = 0; r < 3; ++r)
-          err = std::max(err, std::abs(jacobian_(static_cast<unsigned>(r), static_cast<unsigned>(c)) - J(r, c)));
+          err = std::max(
+              err,
+              std::abs(jacobian_(static_cast<unsigned>(r), static_cast<unsigned>(c)) - J(r, c)));
       if (!(err < 1e-9)) throw std::runtime_error("KDL chain disagrees with the inhand chain");
     }
   }
@@ -114,7 +117,8 @@ class KdlFingerFixture {
  public:
   static constexpr long kMaintenancePeriod = 0;
   KdlFingerFixture(const HandDef<3>& hand, int finger, bool ik, std::uint64_t seed)
-      : finger_(hand.fingers[static_cast<std::size_t>(finger)], random_finger_samples<3>(hand, finger, seed)),
+      : finger_(hand.fingers[static_cast<std::size_t>(finger)],
+                random_finger_samples<3>(hand, finger, seed)),
         ik_(ik) {}
   [[gnu::noinline]] double tick() noexcept { return finger_.run(next_++ & (kSamples - 1), ik_); }
 
@@ -132,7 +136,8 @@ class KdlHandFixture {
     for (int i = 0; i < hand.finger_count(); ++i) {
       std::vector<FingerSample<3>> mine;
       for (const HandSample<3>& s : samples) mine.push_back(s.fingers[static_cast<std::size_t>(i)]);
-      fingers_.push_back(std::make_unique<KdlFinger>(hand.fingers[static_cast<std::size_t>(i)], mine));
+      fingers_.push_back(
+          std::make_unique<KdlFinger>(hand.fingers[static_cast<std::size_t>(i)], mine));
     }
   }
   [[gnu::noinline]] double tick() noexcept {

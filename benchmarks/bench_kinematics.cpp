@@ -42,10 +42,11 @@ class KinematicsFixture {
 };
 
 template <typename S, int Dim, int Dof, int MaxDof>
-void add_kinematics(const std::string& storage, const HandDef<Dim>& hand, int finger, const std::string& label) {
+void add_kinematics(const std::string& storage, const HandDef<Dim>& hand, int finger,
+                    const std::string& label) {
   using Chain = inhand::FingerChain<S, Dim, Dof, MaxDof>;
-  add<KinematicsFixture<Chain>>("kinematics/" + label + "/" + scalar_name<S>() + "/" + storage, true, hand,
-                                finger, std::uint64_t{101});
+  add<KinematicsFixture<Chain>>("kinematics/" + label + "/" + scalar_name<S>() + "/" + storage,
+                                true, hand, finger, std::uint64_t{101});
 }
 
 /// double: fixed, bounded and dynamic storage; float: fixed.

@@ -15,13 +15,12 @@
 //   - a least-squares line through scaling/<n>/double/<storage> (tick time against the
 //     finger count n): slope = cost per finger, intercept = per-tick overhead, with R^2.
 // Missing benchmarks (e.g. a filtered run) show as "n/a".
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -131,7 +130,8 @@ class Report {
     } else if (f->error) {
       s << "error | | | |";
     } else {
-      s << fmt(f->mean) << " | " << fmt(f->median) << " | " << fmt(f->max) << " | " << fmt(f->allocs, 0) << " |";
+      s << fmt(f->mean) << " | " << fmt(f->median) << " | " << fmt(f->max) << " | "
+        << fmt(f->allocs, 0) << " |";
     }
     return s.str();
   }
@@ -144,7 +144,8 @@ class Report {
   }
 
   /// Least-squares line through (n, mean of scaling/n/double/storage).
-  bool fit(const std::string& storage, double& slope, double& intercept, double& r2, int& points) const {
+  bool fit(const std::string& storage, double& slope, double& intercept, double& r2,
+           int& points) const {
     std::vector<double> x, y;
     for (int n = 1; n <= 16; ++n) {
       const double t = mean("scaling/" + std::to_string(n) + "/double/" + storage);
@@ -164,7 +165,8 @@ class Report {
     my /= points;
     double sxy = 0, sxx = 0, syy = 0;
     for (int i = 0; i < points; ++i) {
-      const double dx = x[static_cast<std::size_t>(i)] - mx, dy = y[static_cast<std::size_t>(i)] - my;
+      const double dx = x[static_cast<std::size_t>(i)] - mx,
+                   dy = y[static_cast<std::size_t>(i)] - my;
       sxy += dx * dy;
       sxx += dx * dx;
       syy += dy * dy;
@@ -201,7 +203,8 @@ int main(int argc, char** argv) {
     std::ifstream in(argv[1]);
     if (!in) throw std::runtime_error(std::string("cannot open ") + argv[1]);
     j = read_benchmark_json(in);
-    if (!j.contains("benchmarks") || !j.contains("context")) throw std::runtime_error("not a Google Benchmark JSON file");
+    if (!j.contains("benchmarks") || !j.contains("context"))
+      throw std::runtime_error("not a Google Benchmark JSON file");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "inhand_bench_report: %s\n", e.what());
     return 1;
@@ -210,7 +213,8 @@ int main(int argc, char** argv) {
   std::ostringstream md;
 
   md << "Machine: " << r.context("cpu_model") << ", " << r.context("num_cpus") << " CPUs at "
-     << r.context("mhz_per_cpu") << " MHz; load average before the run: " << r.context("load_before")
+     << r.context("mhz_per_cpu")
+     << " MHz; load average before the run: " << r.context("load_before")
      << ", after: " << r.context("load_after") << ".\n"
      << "Build: " << r.context("inhand_build") << "; Google Benchmark library built as "
      << r.context("library_build_type") << "; " << r.context("date") << ".\n\n";
@@ -249,15 +253,19 @@ int main(int argc, char** argv) {
      << ratio(kdl_hand, r.mean("controller/shadow4/double/bounded")) << " (bounded), "
      << ratio(kdl_hand, r.mean("controller/shadow4/double/dynamic")) << " (dynamic)\n";
   md << "- KDL / inhand, other hands (bounded): allegro4 "
-     << ratio(r.mean("kdl/hand/allegro4"), r.mean("controller/allegro4/double/bounded")) << ", shadow5 "
-     << ratio(r.mean("kdl/hand/shadow5"), r.mean("controller/shadow5/double/bounded")) << ", spatial3x3 "
-     << ratio(r.mean("kdl/hand/spatial3x3"), r.mean("controller/spatial3x3/double/bounded")) << "\n";
+     << ratio(r.mean("kdl/hand/allegro4"), r.mean("controller/allegro4/double/bounded"))
+     << ", shadow5 "
+     << ratio(r.mean("kdl/hand/shadow5"), r.mean("controller/shadow5/double/bounded"))
+     << ", spatial3x3 "
+     << ratio(r.mean("kdl/hand/spatial3x3"), r.mean("controller/spatial3x3/double/bounded"))
+     << "\n";
   md << "- KDL / inhand per finger (FK + Jacobian + IK; inhand also runs the servo): 3 DOF "
      << ratio(r.mean("kdl/finger/spatial3"), r.mean("finger/spatial3/double/fixed")) << ", 4 DOF "
      << ratio(r.mean("kdl/finger/spatial4"), r.mean("finger/spatial4/double/fixed")) << ", 5 DOF "
      << ratio(r.mean("kdl/finger/spatial5"), r.mean("finger/spatial5/double/fixed")) << "\n";
   md << "- KDL / inhand kinematics only (4 DOF): "
-     << ratio(r.mean("kdl/kinematics/spatial4"), r.mean("kinematics/spatial4/double/fixed")) << "\n";
+     << ratio(r.mean("kdl/kinematics/spatial4"), r.mean("kinematics/spatial4/double/fixed"))
+     << "\n";
   const double sc = r.mean("floor/sincos4/double"), sv = r.mean("floor/solve3x4/double");
   const double floor_sum = sc + sv;
   md << "- Latency floor of a 4-DOF finger: sin/cos " << fmt(sc) << " ns + solve chain " << fmt(sv)
@@ -267,9 +275,9 @@ int main(int argc, char** argv) {
     double slope = 0, intercept = 0, r2 = 0;
     int points = 0;
     if (r.fit(storage, slope, intercept, r2, points)) {
-      md << "- Linear fit of the whole tick against the finger count (4-DOF fingers, double, " << storage
-         << ", " << points << " hands): " << fmt(slope) << " ns per finger + " << fmt(intercept)
-         << " ns, R^2 = " << fmt(r2, 4) << "\n";
+      md << "- Linear fit of the whole tick against the finger count (4-DOF fingers, double, "
+         << storage << ", " << points << " hands): " << fmt(slope) << " ns per finger + "
+         << fmt(intercept) << " ns, R^2 = " << fmt(r2, 4) << "\n";
     } else {
       md << "- Linear fit (" << storage << "): n/a\n";
     }
@@ -285,17 +293,19 @@ int main(int argc, char** argv) {
       offenders += " `" + name + "`";
     }
   }
-  md << "- Heap allocations per tick: " << (allocating == 0 ? std::string("0") : std::string("NON-ZERO in") + offenders)
+  md << "- Heap allocations per tick: "
+     << (allocating == 0 ? std::string("0") : std::string("NON-ZERO in") + offenders)
      << " across all " << inhand_count << " inhand benchmarks; KDL: kdl/finger/spatial4 "
-     << fmt(r.find("kdl/finger/spatial4") ? r.find("kdl/finger/spatial4")->allocs : NAN, 0) << ", kdl/hand/shadow4 "
+     << fmt(r.find("kdl/finger/spatial4") ? r.find("kdl/finger/spatial4")->allocs : NAN, 0)
+     << ", kdl/hand/shadow4 "
      << fmt(r.find("kdl/hand/shadow4") ? r.find("kdl/hand/shadow4")->allocs : NAN, 0) << "\n";
 
   md << "\n<details><summary>Every benchmark</summary>\n\n"
      << "| benchmark | mean | median | max | allocs |\n|---|---:|---:|---:|---:|\n";
   for (const std::string& name : r.names()) {
     const Figures* f = r.find(name);
-    md << "| `" << name << "` | " << (f->error ? "error" : fmt(f->mean)) << " | " << fmt(f->median) << " | "
-       << fmt(f->max) << " | " << fmt(f->allocs, 0) << " |\n";
+    md << "| `" << name << "` | " << (f->error ? "error" : fmt(f->mean)) << " | " << fmt(f->median)
+       << " | " << fmt(f->max) << " | " << fmt(f->allocs, 0) << " |\n";
   }
   md << "\n</details>\n";
 

@@ -47,14 +47,16 @@ class PlannerFixture {
     desired_ = Planner::ForceVector::Zero(n);
     for (const HandSample<3>& s : random_hand_samples<3>(hand, seed)) {
       typename Planner::Normals N(3, n);
-      for (int i = 0; i < n; ++i) N.col(i) = s.fingers[static_cast<std::size_t>(i)].normal.template cast<S>();
+      for (int i = 0; i < n; ++i)
+        N.col(i) = s.fingers[static_cast<std::size_t>(i)].normal.template cast<S>();
       normals_.push_back(N);
     }
   }
 
   [[gnu::noinline]] S tick() noexcept {
     const std::size_t k = next_++ & (kSamples - 1);
-    const inhand::ForcePlanStatus st = planner_.plan(touching_, normals_[k], S(kDt), desired_, residual_);
+    const inhand::ForcePlanStatus st =
+        planner_.plan(touching_, normals_[k], S(kDt), desired_, residual_);
     return desired_(0) + static_cast<S>(st);
   }
 
@@ -69,8 +71,8 @@ class PlannerFixture {
 
 template <typename S, int N>
 void add_planner(const HandDef<3>& hand, const std::string& storage) {
-  add<PlannerFixture<S, N>>("planner/" + hand.name + "/" + scalar_name<S>() + "/" + storage, true, hand,
-                            std::uint64_t{303});
+  add<PlannerFixture<S, N>>("planner/" + hand.name + "/" + scalar_name<S>() + "/" + storage, true,
+                            hand, std::uint64_t{303});
 }
 
 }  // namespace
@@ -79,7 +81,8 @@ void register_servo_planner_benchmarks() {
   const HandDef<3> shadow = shadow4_hand();
   add<ServoFixture<double, 3>>("servo/spatial/double/fixed", true, shadow, std::uint64_t{304});
   add<ServoFixture<float, 3>>("servo/spatial/float/fixed", true, shadow, std::uint64_t{304});
-  add<ServoFixture<double, 2>>("servo/planar/double/fixed", true, planar_hand(2), std::uint64_t{304});
+  add<ServoFixture<double, 2>>("servo/planar/double/fixed", true, planar_hand(2),
+                               std::uint64_t{304});
   const HandDef<3> shadow5 = shadow5_hand();
   add_planner<double, 4>(shadow, "fixed");
   add_planner<double, Dynamic>(shadow, "dynamic");

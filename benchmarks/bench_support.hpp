@@ -204,7 +204,8 @@ inline HandDef<3> three_finger_hand() {
 /// Resolved-rate IK (setup only): joint angles putting the fingertip centre at
 /// `target`, from `q0`. Throws if it does not converge to 1e-9 m.
 template <int Dim>
-Eigen::VectorXd solve_fingertip(const RefChain<Dim>& chain, const Vec<Dim>& target, Eigen::VectorXd q) {
+Eigen::VectorXd solve_fingertip(const RefChain<Dim>& chain, const Vec<Dim>& target,
+                                Eigen::VectorXd q) {
   inhand::FingerKinematics<RefChain<Dim>> ws(chain);
   inhand::ContactIk<double, Dim, Dynamic, Dynamic> ik(chain.dof());
   typename RefChain<Dim>::Jacobian J(Dim, chain.dof());
@@ -227,8 +228,8 @@ Eigen::VectorXd solve_fingertip(const RefChain<Dim>& chain, const Vec<Dim>& targ
 inline HandDef<2> planar_hand(int dof) {
   HandDef<2> h;
   h.name = "planar2x" + std::to_string(dof);
-  const std::vector<double> links = dof == 2 ? std::vector<double>{0.05, 0.04}
-                                             : std::vector<double>{0.045, 0.035, 0.03};
+  const std::vector<double> links =
+      dof == 2 ? std::vector<double>{0.05, 0.04} : std::vector<double>{0.045, 0.035, 0.03};
   for (int side = 0; side < 2; ++side) {
     const double s = side == 0 ? 1.0 : -1.0;  // the second finger is the first turned by pi
     RefChain<2> f;
@@ -237,7 +238,8 @@ inline HandDef<2> planar_hand(int dof) {
     f.base.rotation = inhand::so2_exp<double>(-0.5 * kPi + (side == 0 ? 0.0 : kPi));
     for (int i = 0; i < dof; ++i) {
       auto& j = f.joints[i];
-      j.parent_to_joint.position = Vec<2>(i == 0 ? 0.0 : links[static_cast<std::size_t>(i - 1)], 0.0);
+      j.parent_to_joint.position =
+          Vec<2>(i == 0 ? 0.0 : links[static_cast<std::size_t>(i - 1)], 0.0);
       j.axis = Eigen::Vector3d::UnitZ();
       j.lower = -2.5;
       j.upper = 2.5;
@@ -279,11 +281,11 @@ inhand::Rotation<double, Dim> small_rotation(Rng& rng, double max_angle) {
 template <int Dim>
 struct FingerSample {
   Eigen::VectorXd q;
-  Vec<Dim> contact = Vec<Dim>::Zero();  ///< on the fingertip sphere
-  Vec<Dim> normal = Vec<Dim>::UnitX();  ///< object's outward normal at the contact
-  double force = 1.0;                   ///< measured normal force [N]
+  Vec<Dim> contact = Vec<Dim>::Zero();   ///< on the fingertip sphere
+  Vec<Dim> normal = Vec<Dim>::UnitX();   ///< object's outward normal at the contact
+  double force = 1.0;                    ///< measured normal force [N]
   Vec<Dim> velocity = Vec<Dim>::Zero();  ///< a desired contact velocity [m/s]
-  double sigma_min = 0.0;               ///< of the contact Jacobian [m/rad]
+  double sigma_min = 0.0;                ///< of the contact Jacobian [m/rad]
 };
 
 template <int Dim>
@@ -296,7 +298,8 @@ double contact_sigma_min(const RefChain<Dim>& chain, const Eigen::VectorXd& q, c
   // square roots of the eigenvalues of the Dim x Dim matrix J J^T.
   const Eigen::Matrix<double, Dim, Dim> G = J * J.transpose();
   if constexpr (Dim == 2) {
-    const double mean = 0.5 * (G(0, 0) + G(1, 1)), half = std::hypot(0.5 * (G(0, 0) - G(1, 1)), G(0, 1));
+    const double mean = 0.5 * (G(0, 0) + G(1, 1)),
+                 half = std::hypot(0.5 * (G(0, 0) - G(1, 1)), G(0, 1));
     return std::sqrt(std::max(0.0, G.determinant() / (mean + half)));
   } else {
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, Dim, Dim>> eig(G, Eigen::EigenvaluesOnly);
@@ -314,8 +317,9 @@ enum class Conditioning { regular, near_singular };
 /// of 0, limits ignored), touching with the tip of the distal link, sigma_min below
 /// 0.8 x the damping threshold.
 template <int Dim>
-FingerSample<Dim> random_finger_sample(Rng& rng, const RefChain<Dim>& chain, const Eigen::VectorXd& q_nominal,
-                                       const Vec<Dim>& n_nominal, Conditioning mode = Conditioning::regular,
+FingerSample<Dim> random_finger_sample(Rng& rng, const RefChain<Dim>& chain,
+                                       const Eigen::VectorXd& q_nominal, const Vec<Dim>& n_nominal,
+                                       Conditioning mode = Conditioning::regular,
                                        double spread = 0.1) {
   inhand::FingerKinematics<RefChain<Dim>> ws(chain);
   for (int attempt = 0; attempt < 10000; ++attempt) {
@@ -324,7 +328,8 @@ FingerSample<Dim> random_finger_sample(Rng& rng, const RefChain<Dim>& chain, con
     for (int i = 0; i < chain.dof(); ++i) {
       const auto& j = chain.joints[i];
       if (mode == Conditioning::regular) {
-        s.q(i) = std::clamp(q_nominal(i) + uniform(rng, -spread, spread), j.lower + 0.02, j.upper - 0.02);
+        s.q(i) = std::clamp(q_nominal(i) + uniform(rng, -spread, spread), j.lower + 0.02,
+                            j.upper - 0.02);
       } else {
         s.q(i) = i == 0 ? uniform(rng, -0.3, 0.3) : uniform(rng, -0.02, 0.02);
       }
@@ -367,7 +372,8 @@ std::vector<HandSample<Dim>> random_hand_samples(const HandDef<Dim>& hand, std::
     s.object.rotation = small_rotation<Dim>(rng, 0.05) * hand.object.rotation;
     for (int i = 0; i < hand.finger_count(); ++i) {
       const auto k = static_cast<std::size_t>(i);
-      s.fingers.push_back(random_finger_sample<Dim>(rng, hand.fingers[k], hand.grasp_q[k], hand.normals[k]));
+      s.fingers.push_back(
+          random_finger_sample<Dim>(rng, hand.fingers[k], hand.grasp_q[k], hand.normals[k]));
     }
   }
   return out;
@@ -375,13 +381,15 @@ std::vector<HandSample<Dim>> random_hand_samples(const HandDef<Dim>& hand, std::
 
 /// kSamples states of one finger of a hand.
 template <int Dim>
-std::vector<FingerSample<Dim>> random_finger_samples(const HandDef<Dim>& hand, int finger, std::uint64_t seed,
+std::vector<FingerSample<Dim>> random_finger_samples(const HandDef<Dim>& hand, int finger,
+                                                     std::uint64_t seed,
                                                      Conditioning mode = Conditioning::regular) {
   Rng rng(seed);
   const auto k = static_cast<std::size_t>(finger);
   std::vector<FingerSample<Dim>> out;
   for (int i = 0; i < kSamples; ++i)
-    out.push_back(random_finger_sample<Dim>(rng, hand.fingers[k], hand.grasp_q[k], hand.normals[k], mode));
+    out.push_back(
+        random_finger_sample<Dim>(rng, hand.fingers[k], hand.grasp_q[k], hand.normals[k], mode));
   return out;
 }
 
@@ -399,7 +407,8 @@ std::vector<std::string>& rule_violations();
 /// counter allocs_per_tick; for `allocation_free` benchmarks a non-zero count is a
 /// rule violation.
 template <typename Fixture, typename... Args>
-void run_fixture(benchmark::State& state, const std::string& name, bool allocation_free, Args... args) {
+void run_fixture(benchmark::State& state, const std::string& name, bool allocation_free,
+                 Args... args) {
   std::unique_ptr<Fixture> f;
   try {
     f = std::make_unique<Fixture>(args...);
@@ -441,8 +450,10 @@ inline double max_statistic(const std::vector<double>& v) {
 /// Registers `Fixture` under `name` with the suite's common settings.
 template <typename Fixture, typename... Args>
 benchmark::internal::Benchmark* add(const std::string& name, bool allocation_free, Args... args) {
-  benchmark::internal::Benchmark* b = benchmark::RegisterBenchmark(
-      name.c_str(), [=](benchmark::State& state) { run_fixture<Fixture>(state, name, allocation_free, args...); });
+  benchmark::internal::Benchmark* b =
+      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
+        run_fixture<Fixture>(state, name, allocation_free, args...);
+      });
   b->Unit(benchmark::kNanosecond);
   b->ComputeStatistics("max", max_statistic);
   return b;

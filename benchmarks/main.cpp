@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
   // report each broken rule once.
   std::vector<std::string> violations;
   for (const std::string& v : inhand_bench::rule_violations())
-    if (std::find(violations.begin(), violations.end(), v) == violations.end()) violations.push_back(v);
+    if (std::find(violations.begin(), violations.end(), v) == violations.end())
+      violations.push_back(v);
   for (const std::string& v : violations) std::fprintf(stderr, "RULE VIOLATION: %s\n", v.c_str());
   return violations.empty() ? 0 : 1;
 }

@@ -60,23 +60,40 @@ struct Reader {
     const std::uint8_t sel = byte();
     constexpr double inf = std::numeric_limits<double>::infinity();
     switch (sel % 24) {
-      case 0: return std::numeric_limits<double>::quiet_NaN();
-      case 1: return std::numeric_limits<double>::signaling_NaN();
-      case 2: return inf;
-      case 3: return -inf;
-      case 4: return 0.0;
-      case 5: return -0.0;
-      case 6: return std::numeric_limits<double>::max();
-      case 7: return -std::numeric_limits<double>::max();
-      case 8: return std::numeric_limits<double>::min();
-      case 9: return std::numeric_limits<double>::denorm_min();
-      case 10: return 1e300;
-      case 11: return -1e300;
-      case 12: return 1e-300;
-      case 13: return std::numeric_limits<double>::epsilon();
-      case 14: return raw_double();
-      case 15: return nominal * 1e6;
-      case 16: return -nominal;
+      case 0:
+        return std::numeric_limits<double>::quiet_NaN();
+      case 1:
+        return std::numeric_limits<double>::signaling_NaN();
+      case 2:
+        return inf;
+      case 3:
+        return -inf;
+      case 4:
+        return 0.0;
+      case 5:
+        return -0.0;
+      case 6:
+        return std::numeric_limits<double>::max();
+      case 7:
+        return -std::numeric_limits<double>::max();
+      case 8:
+        return std::numeric_limits<double>::min();
+      case 9:
+        return std::numeric_limits<double>::denorm_min();
+      case 10:
+        return 1e300;
+      case 11:
+        return -1e300;
+      case 12:
+        return 1e-300;
+      case 13:
+        return std::numeric_limits<double>::epsilon();
+      case 14:
+        return raw_double();
+      case 15:
+        return nominal * 1e6;
+      case 16:
+        return -nominal;
       default: {  // nominal plus a small signed offset, scaled by a fuzzed decade
         const auto hi = static_cast<std::int8_t>(byte());
         const int decade = static_cast<int>(byte() % 12);
@@ -140,7 +157,8 @@ struct Setup {
       inhand::FingerKinematics<Ctrl::Chain> ws(c);
       inhand::forward_kinematics(c, f.joint_positions, ws);
       f.virtual_contact_point = inhand::fingertip_surface_point(c, ws, t.normal);
-      inhand::point_jacobian(ws, f.contact.touching ? ws.fingertip.position : f.virtual_contact_point, f.jacobian);
+      inhand::point_jacobian(
+          ws, f.contact.touching ? ws.fingertip.position : f.virtual_contact_point, f.jacobian);
     }
   }
 };
@@ -181,19 +199,28 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static const Setup setup;
   Reader r{data, size};
   static_assert(noexcept(std::declval<Ctrl&>().update(std::declval<const Ctrl::Input&>(),
-                                                     std::declval<Ctrl::Output&>())),
+                                                      std::declval<Ctrl::Output&>())),
                 "update() must be noexcept");
   try {
     const std::uint8_t header = r.byte();
     Ctrl::Config cfg = setup.config;
     if (header & 2u) cfg.max_joint_acceleration = 300.0;
     for (int i = 0; i < kFingers; ++i)
-      if (header & (4u << i)) cfg.fingers[static_cast<std::size_t>(i)].kinematics = Ctrl::KinematicsSource::external;
+      if (header & (4u << i))
+        cfg.fingers[static_cast<std::size_t>(i)].kinematics = Ctrl::KinematicsSource::external;
     switch ((header >> 5) & 3u) {
-      case 1: cfg.servo.force.integral_limit = 0.5; cfg.servo.force.output_limit = 0.05; break;
-      case 2: cfg.servo.motion.output_limit = 0.02; break;
-      case 3: cfg.servo.force.ki = 0.0; break;
-      default: break;
+      case 1:
+        cfg.servo.force.integral_limit = 0.5;
+        cfg.servo.force.output_limit = 0.05;
+        break;
+      case 2:
+        cfg.servo.motion.output_limit = 0.02;
+        break;
+      case 3:
+        cfg.servo.force.ki = 0.0;
+        break;
+      default:
+        break;
     }
     Ctrl ctl;
     if (!ctl.configure(cfg).ok()) __builtin_trap();
@@ -212,7 +239,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       in.time = t;
       const auto st = ctl.update(in, out);
       check(ctl, st, out);
-      if (st != inhand::ControllerStatus::grasped) __builtin_trap();  // the perfect tick must complete the grasp
+      if (st != inhand::ControllerStatus::grasped)
+        __builtin_trap();  // the perfect tick must complete the grasp
       inhand::ObjectTrajectory<double, 3> traj;
       traj.reset(in.object_pose);
       inhand::Twist<double, 3> d;

@@ -17,7 +17,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
-    const inhand::examples::ScenarioFile f = inhand::examples::parse_scenario(inhand::examples::parse_json_text(text));
+    const inhand::examples::ScenarioFile f =
+        inhand::examples::parse_scenario(inhand::examples::parse_json_text(text));
     // A file that was accepted must describe a runnable scenario.
     if (f.spec.stages.empty() || f.spec.name.empty()) __builtin_trap();
   } catch (const inhand::examples::JsonError&) {

@@ -44,7 +44,7 @@ struct ScenarioFile {
   plant::ScenarioSpec spec;
   Expectations expect;
   std::vector<FaultExpectation> fault_expect;  ///< one per spec.faults entry
-  std::string hand_preset;  ///< "shadow_like" or "three_finger"
+  std::string hand_preset;                     ///< "shadow_like" or "three_finger"
   std::string description;
 };
 
@@ -420,17 +420,19 @@ inline ScenarioFile parse_scenario(const Json& j) {
 
 /// Human-readable violations of the faults' "expect" bounds by the run's fault reports
 /// (same order as the file's "faults"); empty when all hold.
-inline std::vector<std::string> check_fault_expectations(const std::vector<FaultExpectation>& expect,
-                                                         const std::vector<plant::FaultReport>& reports) {
+inline std::vector<std::string> check_fault_expectations(
+    const std::vector<FaultExpectation>& expect, const std::vector<plant::FaultReport>& reports) {
   std::vector<std::string> out;
   for (std::size_t i = 0; i < expect.size() && i < reports.size(); ++i) {
     const FaultExpectation& e = expect[i];
     const plant::FaultReport& r = reports[i];
     const std::string who = "fault " + std::to_string(i) + " (" + plant::to_string(r.kind) + ")";
-    const auto check_ticks = [&](const char* what, long ticks, const std::optional<long long>& bound) {
+    const auto check_ticks = [&](const char* what, long ticks,
+                                 const std::optional<long long>& bound) {
       if (!bound) return;
       if (ticks < 0)
-        out.push_back(who + ": " + what + " never happened (bound " + std::to_string(*bound) + " ticks)");
+        out.push_back(who + ": " + what + " never happened (bound " + std::to_string(*bound) +
+                      " ticks)");
       else if (ticks > *bound)
         out.push_back(who + ": " + what + " after " + std::to_string(ticks) + " ticks exceeds " +
                       std::to_string(*bound));
@@ -438,8 +440,8 @@ inline std::vector<std::string> check_fault_expectations(const std::vector<Fault
     check_ticks("detection", r.detection_ticks, e.max_detection_ticks);
     check_ticks("reacquisition", r.reacquire_ticks, e.max_reacquire_ticks);
     if (e.max_force_integral && !(r.max_force_integral <= *e.max_force_integral))
-      out.push_back(who + ": max |force integral| " + detail::fmt(r.max_force_integral) + " N s exceeds " +
-                    detail::fmt(*e.max_force_integral) + " N s");
+      out.push_back(who + ": max |force integral| " + detail::fmt(r.max_force_integral) +
+                    " N s exceeds " + detail::fmt(*e.max_force_integral) + " N s");
   }
   return out;
 }

@@ -11,7 +11,6 @@
 #include <Eigen/Dense>
 #include <Eigen/QR>
 #include <Eigen/SVD>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -126,7 +125,8 @@ inline VecXd reference_damped_solve_l2(const MatXd& A, const VecXd& b, double l2
 /// smallest singular value.
 inline VecXd reference_damped_solve(const MatXd& A, const VecXd& b, double threshold,
                                     double max_damping) {
-  return reference_damped_solve_l2(A, b, schedule_damping_squared(sigma_min(A), threshold, max_damping));
+  return reference_damped_solve_l2(A, b,
+                                   schedule_damping_squared(sigma_min(A), threshold, max_damping));
 }
 
 /// A unit vector orthogonal to range(A) (A with more rows than columns).
@@ -160,7 +160,8 @@ struct Shape {
   static std::string name() {
     std::string s = std::is_same<S, float>::value ? "float_" : "double_";
     s += std::to_string(M) + "x" + std::to_string(RunN);
-    if (N == Eigen::Dynamic) s += (MaxN == Eigen::Dynamic) ? "_dynamic" : "_bounded" + std::to_string(MaxN);
+    if (N == Eigen::Dynamic)
+      s += (MaxN == Eigen::Dynamic) ? "_dynamic" : "_bounded" + std::to_string(MaxN);
     return s;
   }
   static Ik make_ik(const inhand::IkParams<S>& p = {}) { return Ik(RunN, p); }

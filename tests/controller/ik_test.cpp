@@ -6,6 +6,8 @@
 //
 // Error bounds: the solver works on the Gram matrix, whose condition number is
 // kappa^2, so residuals are judged against C * eps * kappa^2 (C stated per test).
+#include "inhand/controller/ik.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,7 +17,6 @@
 #include <type_traits>
 
 #include "controller/controller_fixtures.hpp"
-#include "inhand/controller/ik.hpp"
 #include "inhand/kinematics/finger_chain.hpp"
 
 namespace {
@@ -26,20 +27,22 @@ using inhand::IkStatus;
 template <typename Sh>
 class IkShapeTest : public ::testing::Test {};
 
-using Shapes = ::testing::Types<
-    Shape<double, 2, 2>, Shape<double, 2, 3>, Shape<double, 3, 2>, Shape<double, 3, 3>,
-    Shape<double, 3, 4>, Shape<double, 3, 5>, Shape<float, 2, 2>, Shape<float, 2, 3>,
-    Shape<float, 3, 2>, Shape<float, 3, 3>, Shape<float, 3, 4>, Shape<float, 3, 5>,
-    Shape<double, 3, Eigen::Dynamic, Eigen::Dynamic, 4>, Shape<float, 3, Eigen::Dynamic, Eigen::Dynamic, 2>,
-    Shape<double, 3, Eigen::Dynamic, 5, 5>, Shape<float, 3, Eigen::Dynamic, 5, 5>,
-    Shape<double, 2, Eigen::Dynamic, 5, 3>, Shape<float, 3, Eigen::Dynamic, 5, 2>>;
+using Shapes =
+    ::testing::Types<Shape<double, 2, 2>, Shape<double, 2, 3>, Shape<double, 3, 2>,
+                     Shape<double, 3, 3>, Shape<double, 3, 4>, Shape<double, 3, 5>,
+                     Shape<float, 2, 2>, Shape<float, 2, 3>, Shape<float, 3, 2>, Shape<float, 3, 3>,
+                     Shape<float, 3, 4>, Shape<float, 3, 5>,
+                     Shape<double, 3, Eigen::Dynamic, Eigen::Dynamic, 4>,
+                     Shape<float, 3, Eigen::Dynamic, Eigen::Dynamic, 2>,
+                     Shape<double, 3, Eigen::Dynamic, 5, 5>, Shape<float, 3, Eigen::Dynamic, 5, 5>,
+                     Shape<double, 2, Eigen::Dynamic, 5, 3>, Shape<float, 3, Eigen::Dynamic, 5, 2>>;
 TYPED_TEST_SUITE(IkShapeTest, Shapes, TypeNames);
 
 /// theta_dot from ContactIk::solve, in double, with the report.
 template <typename Sh>
 VecXd ik_solve(typename Sh::Ik& ik, const typename Sh::Jacobian& J, const VecXd& xdot,
-               const typename Sh::JointVector& limits, inhand::IkReport<typename Sh::Scalar>* report,
-               const VecXd* z = nullptr) {
+               const typename Sh::JointVector& limits,
+               inhand::IkReport<typename Sh::Scalar>* report, const VecXd* z = nullptr) {
   typename Sh::JointVector qd = Sh::constant_joints(typename Sh::Scalar(0));
   const typename Sh::CartesianVector x = Sh::cartesian(xdot);
   inhand::IkReport<typename Sh::Scalar> r;
@@ -76,7 +79,8 @@ TYPED_TEST(IkShapeTest, PseudoInversePenroseIdentities) {
   double worst = 0.0;
   const int count = sweep_count();
   for (int t = 0; t < count; ++t) {
-    const auto J = Sh::jacobian(matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
+    const auto J = Sh::jacobian(
+        matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
     const MatXd A = J.template cast<double>();
     inhand::IkReport<S> rep;
     const MatXd P = ik_pinv<Sh>(ik, J, &rep);
@@ -106,7 +110,8 @@ TYPED_TEST(IkShapeTest, PseudoInverseMatchesCompleteOrthogonalDecomposition) {
   double worst = 0.0;
   const int count = sweep_count();
   for (int t = 0; t < count; ++t) {
-    const auto J = Sh::jacobian(matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
+    const auto J = Sh::jacobian(
+        matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
     const MatXd A = J.template cast<double>();
     const MatXd P = ik_pinv<Sh>(ik, J, nullptr);
     const MatXd Pref = reference_pinv(A);
@@ -129,7 +134,8 @@ TYPED_TEST(IkShapeTest, ExactLeastSquaresOrMinimumNorm) {
   const auto limits = Sh::no_limits();
   const int count = sweep_count();
   for (int t = 0; t < count; ++t) {
-    const auto J = Sh::jacobian(matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
+    const auto J = Sh::jacobian(
+        matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
     const MatXd A = J.template cast<double>();
     VecXd xd = gaussian_vector(m, rng);
     // Least squares: a part in range(J) plus a unit normal to it, so the residual is ~1.
@@ -249,8 +255,10 @@ TYPED_TEST(IkShapeTest, VelocityLimitsScaleTheWholeVector) {
     VecXd lim(n);
     double expected_scale = 1.0;
     for (int i = 0; i < n; ++i) {
-      lim(i) = static_cast<double>(static_cast<S>(std::max(std::abs(q0(i)) * uniform(rng, 0.3, 1.6), 1e-3)));
-      if (std::abs(q0(i)) > lim(i)) expected_scale = std::min(expected_scale, lim(i) / std::abs(q0(i)));
+      lim(i) = static_cast<double>(
+          static_cast<S>(std::max(std::abs(q0(i)) * uniform(rng, 0.3, 1.6), 1e-3)));
+      if (std::abs(q0(i)) > lim(i))
+        expected_scale = std::min(expected_scale, lim(i) / std::abs(q0(i)));
     }
     const VecXd q = ik_solve<Sh>(ik, J, xd, Sh::joint_vector(lim), &rep);
     const double sc = static_cast<double>(rep.limit_scale);
@@ -278,7 +286,8 @@ TYPED_TEST(IkShapeTest, NullSpaceTerm) {
   double worst = 0.0;
   const int count = sweep_count();
   for (int t = 0; t < count; ++t) {
-    const auto J = Sh::jacobian(matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
+    const auto J = Sh::jacobian(
+        matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
     const MatXd A = J.template cast<double>();
     const VecXd xd = Sh::cartesian(gaussian_vector(m, rng)).template cast<double>();
     const VecXd z = Sh::joint_vector(gaussian_vector(n, rng)).template cast<double>();
@@ -295,7 +304,8 @@ TYPED_TEST(IkShapeTest, NullSpaceTerm) {
     const double tol = 50 * eps<S>() * kappa * kappa;
     const VecXd d = qz - q0;
     const VecXd expected = z - reference_pinv(A) * (A * z);
-    ASSERT_LE((A * d).norm(), tol * A.norm() * z.norm()) << "J (null-space term) != 0, sample " << t;
+    ASSERT_LE((A * d).norm(), tol * A.norm() * z.norm())
+        << "J (null-space term) != 0, sample " << t;
     ASSERT_LE((d - expected).norm(), tol * z.norm()) << "sample " << t;
     worst = std::max(worst, (A * d).norm() / (A.norm() * z.norm()));
   }
@@ -311,7 +321,8 @@ TYPED_TEST(IkShapeTest, NullSpaceTermRespectsLimits) {
   auto ik = Sh::make_ik();
   const int count = sweep_count() / 4;
   for (int t = 0; t < count; ++t) {
-    const auto J = Sh::jacobian(matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
+    const auto J = Sh::jacobian(
+        matrix_with_singular_values(m, n, random_singular_values(k, 0.05, 2.0, rng), rng));
     const VecXd xd = gaussian_vector(m, rng);
     const VecXd z = 10.0 * gaussian_vector(n, rng);
     const VecXd lim = VecXd::Constant(n, 0.5);
@@ -405,11 +416,11 @@ class IkFingerTest : public ::testing::Test {};
 
 using Fingers = ::testing::Types<
     inhand_test::Planar2<float>, inhand_test::Planar2<double>, inhand_test::Planar3<float>,
-    inhand_test::Planar3<double>, inhand::FingerChain<float, 3, 2>, inhand::FingerChain<double, 3, 2>,
-    inhand_test::Spatial3<float>, inhand_test::Spatial3<double>, inhand_test::Spatial4<float>,
-    inhand_test::Spatial4<double>, inhand_test::Spatial5<float>, inhand_test::Spatial5<double>,
-    inhand_test::SpatialDynamic<double>, inhand_test::SpatialBounded<float>,
-    inhand_test::SpatialBounded<double>>;
+    inhand_test::Planar3<double>, inhand::FingerChain<float, 3, 2>,
+    inhand::FingerChain<double, 3, 2>, inhand_test::Spatial3<float>, inhand_test::Spatial3<double>,
+    inhand_test::Spatial4<float>, inhand_test::Spatial4<double>, inhand_test::Spatial5<float>,
+    inhand_test::Spatial5<double>, inhand_test::SpatialDynamic<double>,
+    inhand_test::SpatialBounded<float>, inhand_test::SpatialBounded<double>>;
 TYPED_TEST_SUITE(IkFingerTest, Fingers, inhand_test::ChainNames);
 
 template <typename Chain>
@@ -418,8 +429,9 @@ using FingerIk = inhand::ContactIk<typename Chain::Scalar, Chain::Dim, Chain::Do
 /// Contact Jacobian of `chain` at joint angles q for the point at `offset` in the
 /// fingertip frame.
 template <typename Chain>
-typename Chain::Jacobian contact_jacobian(const Chain& chain, const typename Chain::JointVector& q,
-                                          const inhand::Vector<typename Chain::Scalar, Chain::Dim>& offset) {
+typename Chain::Jacobian contact_jacobian(
+    const Chain& chain, const typename Chain::JointVector& q,
+    const inhand::Vector<typename Chain::Scalar, Chain::Dim>& offset) {
   inhand::FingerKinematics<Chain> ws(chain);
   inhand::forward_kinematics(chain, q, ws);
   typename Chain::Jacobian J(Chain::Dim, chain.dof());
@@ -446,7 +458,8 @@ TYPED_TEST(IkFingerTest, MinSingularValueMatchesJacobiSvd) {
     ASSERT_EQ(sv.size(), std::min(Chain::Dim, chain.dof()));
     typename Chain::JointVector qd(chain.dof());
     qd.setZero();
-    const auto rep = ik.solve(J, inhand::Vector<S, Chain::Dim>::UnitX(), chain.velocity_limits(), qd);
+    const auto rep =
+        ik.solve(J, inhand::Vector<S, Chain::Dim>::UnitX(), chain.velocity_limits(), qd);
     const double rs = static_cast<double>(rep.min_singular_value), ts = sv.minCoeff();
     const double err = std::abs(rs * rs - ts * ts) / (eps<S>() * sv.maxCoeff() * sv.maxCoeff());
     worst = std::max(worst, err);
@@ -516,7 +529,9 @@ TEST(ContactIkFourJoint, DampedSolveIsFiniteAndCorrect) {
       const MatXd A = J.template cast<double>();
       const VecXd xd = Eigen::Vector3d(gaussian_vector(3, rng)).cast<S>().template cast<double>();
       Eigen::Matrix<S, 4, 1> qd = Eigen::Matrix<S, 4, 1>::Zero();
-      const auto rep = ik.solve(J, xd.cast<S>(), Eigen::Matrix<S, 4, 1>::Constant(std::numeric_limits<S>::infinity()), qd);
+      const auto rep =
+          ik.solve(J, xd.cast<S>(),
+                   Eigen::Matrix<S, 4, 1>::Constant(std::numeric_limits<S>::infinity()), qd);
       const double bound = static_cast<double>(ik.gain_bound()) * xd.norm();
       ASSERT_TRUE(qd.allFinite());
       ASSERT_FALSE(has(rep.status, IkStatus::invalid_input));

@@ -2,6 +2,8 @@
 // convention along the object's outward normal, motion part = g1(v_d), total = motion
 // + force, the inactive force loop, a closed loop against a spring contact, and
 // invalid input. Planar and spatial, float and double.
+#include "inhand/controller/servo.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,7 +14,6 @@
 #include <vector>
 
 #include "common/test_support.hpp"
-#include "inhand/controller/servo.hpp"
 
 namespace {
 
@@ -27,7 +28,8 @@ struct Config {
   using Scalar = S;
   static constexpr int Dim = D;
   static std::string name() {
-    return std::string(std::is_same<S, float>::value ? "float" : "double") + "_dim" + std::to_string(D);
+    return std::string(std::is_same<S, float>::value ? "float" : "double") + "_dim" +
+           std::to_string(D);
   }
 };
 struct ConfigNames {
@@ -39,7 +41,8 @@ struct ConfigNames {
 
 template <typename C>
 class ServoTest : public ::testing::Test {};
-using Configs = ::testing::Types<Config<float, 2>, Config<double, 2>, Config<float, 3>, Config<double, 3>>;
+using Configs =
+    ::testing::Types<Config<float, 2>, Config<double, 2>, Config<float, 3>, Config<double, 3>>;
 TYPED_TEST_SUITE(ServoTest, Configs, ConfigNames);
 
 template <typename S>
@@ -142,7 +145,8 @@ TYPED_TEST(ServoTest, InactiveForceLoopIsZeroAndFrozen) {
   const S nan = std::numeric_limits<S>::quiet_NaN();
   HybridServo<S, D> servo;
   ServoCommand<S, D> out;
-  for (int k = 0; k < 50; ++k) servo.update(V::Zero(), S(1), S(0.2), V::UnitX(), true, S(1e-3), out);
+  for (int k = 0; k < 50; ++k)
+    servo.update(V::Zero(), S(1), S(0.2), V::UnitX(), true, S(1e-3), out);
   const auto frozen = servo.force_pi().integral();
   ASSERT_GT(frozen(0), S(0));
   const V vd = V::Constant(S(0.02));
@@ -175,7 +179,8 @@ struct SpringLoop {
   std::vector<double> force_error;
   double tangential_travel = 0.0;
 
-  void run(const inhand::Vector<S, D>& n, const inhand::Vector<S, D>& tangent_velocity, double seconds) {
+  void run(const inhand::Vector<S, D>& n, const inhand::Vector<S, D>& tangent_velocity,
+           double seconds) {
     const double dt = 1e-3;
     HybridServo<S, D> servo(gains);
     ServoCommand<S, D> out;
@@ -187,12 +192,14 @@ struct SpringLoop {
       const double penetration = std::max(0.0, surface - p.dot(n.template cast<double>()));
       const double f = k * penetration;
       force_error.push_back(f - desired);
-      servo.update(tangent_velocity, static_cast<S>(desired), static_cast<S>(f), n, true, static_cast<S>(dt), out);
+      servo.update(tangent_velocity, static_cast<S>(desired), static_cast<S>(f), n, true,
+                   static_cast<S>(dt), out);
       p += dt * out.total.template cast<double>();
       surface += dt * surface_speed;
     }
     const Eigen::Matrix<double, D, 1> travel = p - p0;
-    tangential_travel = (travel - travel.dot(n.template cast<double>()) * n.template cast<double>()).norm();
+    tangential_travel =
+        (travel - travel.dot(n.template cast<double>()) * n.template cast<double>()).norm();
   }
 };
 
@@ -256,11 +263,13 @@ TYPED_TEST(ServoTest, InvalidInputGivesZeroAndFreezes) {
   gains.motion.ki = S(1);
   HybridServo<S, D> servo(gains);
   ServoCommand<S, D> out;
-  for (int k = 0; k < 20; ++k) servo.update(V::Constant(S(0.01)), S(1), S(0.5), V::UnitX(), true, S(1e-3), out);
+  for (int k = 0; k < 20; ++k)
+    servo.update(V::Constant(S(0.01)), S(1), S(0.5), V::UnitX(), true, S(1e-3), out);
   const auto motion_frozen = servo.motion_pi().integral();
   const auto force_frozen = servo.force_pi().integral();
   const V good = V::Constant(S(0.01));
-  auto expect_invalid = [&](const V& vd, S fd, S fm, const V& n, bool active, S dt, const char* what) {
+  auto expect_invalid = [&](const V& vd, S fd, S fm, const V& n, bool active, S dt,
+                            const char* what) {
     out.motion.setConstant(S(7));
     out.force.setConstant(S(7));
     out.total.setConstant(S(7));

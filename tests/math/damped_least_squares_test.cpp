@@ -6,6 +6,8 @@
 // Error bounds: the solver works on the Gram matrix (J J^T or J^T J), whose condition
 // number is kappa^2, so every residual is judged against C * eps * kappa^2 with the
 // constant C stated next to each test.
+#include "inhand/math/damped_least_squares.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,7 +16,6 @@
 #include <vector>
 
 #include "controller/controller_fixtures.hpp"
-#include "inhand/math/damped_least_squares.hpp"
 
 namespace {
 
@@ -23,13 +24,15 @@ using namespace inhand_ctl_test;
 template <typename Sh>
 class DlsShapeTest : public ::testing::Test {};
 
-using Shapes = ::testing::Types<
-    Shape<double, 2, 2>, Shape<double, 2, 3>, Shape<double, 3, 2>, Shape<double, 3, 3>,
-    Shape<double, 3, 4>, Shape<double, 3, 5>, Shape<float, 2, 2>, Shape<float, 2, 3>,
-    Shape<float, 3, 2>, Shape<float, 3, 3>, Shape<float, 3, 4>, Shape<float, 3, 5>,
-    Shape<double, 3, Eigen::Dynamic, Eigen::Dynamic, 4>, Shape<float, 3, Eigen::Dynamic, Eigen::Dynamic, 2>,
-    Shape<double, 3, Eigen::Dynamic, 5, 5>, Shape<float, 3, Eigen::Dynamic, 5, 5>,
-    Shape<double, 2, Eigen::Dynamic, 5, 3>, Shape<float, 3, Eigen::Dynamic, 5, 2>>;
+using Shapes =
+    ::testing::Types<Shape<double, 2, 2>, Shape<double, 2, 3>, Shape<double, 3, 2>,
+                     Shape<double, 3, 3>, Shape<double, 3, 4>, Shape<double, 3, 5>,
+                     Shape<float, 2, 2>, Shape<float, 2, 3>, Shape<float, 3, 2>, Shape<float, 3, 3>,
+                     Shape<float, 3, 4>, Shape<float, 3, 5>,
+                     Shape<double, 3, Eigen::Dynamic, Eigen::Dynamic, 4>,
+                     Shape<float, 3, Eigen::Dynamic, Eigen::Dynamic, 2>,
+                     Shape<double, 3, Eigen::Dynamic, 5, 5>, Shape<float, 3, Eigen::Dynamic, 5, 5>,
+                     Shape<double, 2, Eigen::Dynamic, 5, 3>, Shape<float, 3, Eigen::Dynamic, 5, 2>>;
 TYPED_TEST_SUITE(DlsShapeTest, Shapes, TypeNames);
 
 /// Factorises and returns the pseudo-inverse the solver applies, in double.
@@ -167,9 +170,9 @@ TYPED_TEST(DlsShapeTest, DampedTendsToPseudoInverse) {
   // Float keeps kappa^2 eps small by using a larger sigma_min.
   const double smin = is_double ? 1e-3 : 3e-2;
   const double threshold = is_double ? 5e-3 : 1e-1;
-  const std::vector<double> ratios = is_double
-                                         ? std::vector<double>{1, 0.3, 0.1, 3e-2, 1e-2, 3e-3, 1e-3, 1e-4, 1e-5}
-                                         : std::vector<double>{1, 0.3, 0.1, 3e-2, 1e-2, 1e-3};
+  const std::vector<double> ratios =
+      is_double ? std::vector<double>{1, 0.3, 0.1, 3e-2, 1e-2, 3e-3, 1e-3, 1e-4, 1e-5}
+                : std::vector<double>{1, 0.3, 0.1, 3e-2, 1e-2, 1e-3};
   Rng rng(104);
   auto dls = Sh::make_dls();
   double worst_dev = 0.0, worst_final = 0.0;
@@ -243,8 +246,9 @@ TYPED_TEST(DlsShapeTest, SingularSolutionBoundedAndDamped) {
         // lambda follows the schedule for the reported sigma_min, and x is the damped
         // solution for that lambda.
         const double l2 = static_cast<double>(res.damping) * static_cast<double>(res.damping);
-        ASSERT_NEAR(l2, schedule_damping_squared(static_cast<double>(res.min_singular_value), sc[0], sc[1]),
-                    1e-4 * sc[1] * sc[1]);
+        ASSERT_NEAR(
+            l2, schedule_damping_squared(static_cast<double>(res.min_singular_value), sc[0], sc[1]),
+            1e-4 * sc[1] * sc[1]);
         const VecXd xref = reference_damped_solve_l2(A, b, l2);
         ASSERT_LE((x - xref).norm(), tol * bound) << "sigma_min " << sm << " schedule " << sc[0];
         worst_ratio = std::max(worst_ratio, x.norm() / bound);
@@ -295,7 +299,8 @@ TYPED_TEST(DlsShapeTest, SingularValueSweepBoundedAndContinuous) {
         ASSERT_TRUE(x.allFinite());
         ASSERT_LE(x.norm(), gb * (1 + tol)) << "sigma " << s(k - 1);
         const double l2 = static_cast<double>(res.damping) * static_cast<double>(res.damping);
-        ASSERT_LE((x - reference_damped_solve_l2(A, b, l2)).norm(), tol * gb) << "sigma " << s(k - 1);
+        ASSERT_LE((x - reference_damped_solve_l2(A, b, l2)).norm(), tol * gb)
+            << "sigma " << s(k - 1);
         if (std::is_same<S, double>::value) {
           // End to end in double, where sigma_min is resolved to ~1e-8 sigma_max: the
           // same as the solution damped for the TRUE sigma_min.
@@ -340,7 +345,8 @@ TYPED_TEST(DlsShapeTest, MinSingularValueMatchesJacobiSvd) {
     ASSERT_EQ(sv.size(), k);
     const double truth = sv.minCoeff();
     const double rep = static_cast<double>(res.min_singular_value);
-    const double err = std::abs(rep * rep - truth * truth) / (eps<S>() * sv.maxCoeff() * sv.maxCoeff());
+    const double err =
+        std::abs(rep * rep - truth * truth) / (eps<S>() * sv.maxCoeff() * sv.maxCoeff());
     worst = std::max(worst, err);
     ASSERT_LE(err, 20.0) << "reported " << rep << " true " << truth << ", sample " << t;
   }

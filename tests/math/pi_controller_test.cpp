@@ -2,6 +2,8 @@
 // computation, anti-windup by conditional integration (bounded integral, no
 // overshoot after the error changes sign), the integral limit, reset, invalid input
 // and validate().
+#include "inhand/math/pi_controller.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,7 +12,6 @@
 #include <random>
 
 #include "common/test_support.hpp"
-#include "inhand/math/pi_controller.hpp"
 
 namespace {
 
@@ -66,7 +67,8 @@ TYPED_TEST(PiTest, RandomSequencesMatchReference) {
   auto rng = inhand_test::make_rng(301);
   const int count = inhand_test::scaled(1000);
   for (int t = 0; t < count; ++t) {
-    const double kp = inhand_test::uniform<double>(rng, 0, 5), ki = inhand_test::uniform<double>(rng, 0, 5);
+    const double kp = inhand_test::uniform<double>(rng, 0, 5),
+                 ki = inhand_test::uniform<double>(rng, 0, 5);
     PiController<S, 3> pi(PiGains<S>{static_cast<S>(kp), static_cast<S>(ki)});
     Eigen::Vector3d I = Eigen::Vector3d::Zero();
     for (int k = 0; k < 20; ++k) {
@@ -75,8 +77,9 @@ TYPED_TEST(PiTest, RandomSequencesMatchReference) {
       V u;
       ASSERT_EQ(pi.update(x, dt, u), PiStatus::ok);
       I += x.template cast<double>() * static_cast<double>(dt);
-      const Eigen::Vector3d ref = static_cast<double>(static_cast<S>(kp)) * x.template cast<double>() +
-                                  static_cast<double>(static_cast<S>(ki)) * I;
+      const Eigen::Vector3d ref =
+          static_cast<double>(static_cast<S>(kp)) * x.template cast<double>() +
+          static_cast<double>(static_cast<S>(ki)) * I;
       ASSERT_LE((u.template cast<double>() - ref).norm(), 64 * tol<S>() * (1 + ref.norm()));
     }
   }
@@ -177,7 +180,8 @@ TYPED_TEST(PiTest, IntegralLimitKeepsDirection) {
   for (int k = 0; k < count; ++k) {
     const V x = inhand_test::random_vector<S, 3>(rng, S(-1), S(1)) + V(S(0.3), S(0), S(0));
     const S dt = S(0.05);
-    const Eigen::Vector3d cand = pi.integral().template cast<double>() + static_cast<double>(dt) * x.template cast<double>();
+    const Eigen::Vector3d cand =
+        pi.integral().template cast<double>() + static_cast<double>(dt) * x.template cast<double>();
     V u;
     const PiStatus st = pi.update(x, dt, u);
     const Eigen::Vector3d I = pi.integral().template cast<double>();
@@ -185,7 +189,8 @@ TYPED_TEST(PiTest, IntegralLimitKeepsDirection) {
     if (cand.norm() > static_cast<double>(L) * (1 + tol<S>())) {
       ++limited;
       ASSERT_TRUE(has(st, PiStatus::integral_limited));
-      ASSERT_LE((I - cand * (static_cast<double>(L) / cand.norm())).norm(), 4 * tol<S>()) << "step " << k;
+      ASSERT_LE((I - cand * (static_cast<double>(L) / cand.norm())).norm(), 4 * tol<S>())
+          << "step " << k;
     } else if (cand.norm() < static_cast<double>(L) * (1 - tol<S>())) {
       ASSERT_FALSE(has(st, PiStatus::integral_limited));
       ASSERT_LE((I - cand).norm(), 4 * tol<S>());
@@ -212,10 +217,12 @@ TYPED_TEST(PiTest, OutputLimitKeepsDirection) {
     const Eigen::Vector3d raw = 3.0 * x.template cast<double>() + I;
     ASSERT_LE(u.template cast<double>().norm(), 1.0 + 4 * tol<S>());
     if (has(st, PiStatus::output_limited)) {
-      ASSERT_GE(u.template cast<double>().dot(raw), (1 - 4 * tol<S>()) * u.template cast<double>().norm() * raw.norm());
+      ASSERT_GE(u.template cast<double>().dot(raw),
+                (1 - 4 * tol<S>()) * u.template cast<double>().norm() * raw.norm());
       // Conditional integration: the integral moved only if that reduced |u|.
       if ((I - I_before).norm() > 0) {
-        ASSERT_LE(raw.norm(), (3.0 * x.template cast<double>() + I_before).norm() * (1 + 4 * tol<S>()));
+        ASSERT_LE(raw.norm(),
+                  (3.0 * x.template cast<double>() + I_before).norm() * (1 + 4 * tol<S>()));
       }
     } else {
       ASSERT_LE((u.template cast<double>() - raw).norm(), 8 * tol<S>());
@@ -249,7 +256,7 @@ TYPED_TEST(PiTest, InvalidInputGivesZeroAndFreezesIntegral) {
   const struct {
     V x;
     S dt;
-  } bad[] = {{V(nan, S(0)), S(0.1)}, {V(S(0), inf), S(0.1)}, {V(-inf, S(0)), S(0.1)},
+  } bad[] = {{V(nan, S(0)), S(0.1)}, {V(S(0), inf), S(0.1)},   {V(-inf, S(0)), S(0.1)},
              {V(S(1), S(1)), S(0)},  {V(S(1), S(1)), S(-0.1)}, {V(S(1), S(1)), nan},
              {V(S(1), S(1)), inf}};
   for (const auto& b : bad) {

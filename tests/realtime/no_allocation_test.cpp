@@ -15,9 +15,9 @@
 #undef NDEBUG
 #define EIGEN_RUNTIME_NO_MALLOC
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <atomic>
 #include <cassert>
 #include <cmath>
@@ -40,12 +40,14 @@ std::atomic<long> g_allocations{0};
 std::atomic<bool> g_counting{false};
 
 void* counted_malloc(std::size_t n) noexcept {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (g_counting.load(std::memory_order_relaxed))
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
   return std::malloc(n == 0 ? 1 : n);
 }
 
 void* counted_aligned_malloc(std::size_t n, std::align_val_t al) noexcept {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (g_counting.load(std::memory_order_relaxed))
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
   std::size_t a = static_cast<std::size_t>(al);
   if (a < sizeof(void*)) a = sizeof(void*);
   void* p = nullptr;
@@ -182,7 +184,8 @@ TYPED_TEST(NoAllocationTest, PerTickPathDoesNotAllocate) {
         const V contact = (i % 7 == 0) ? V(ws.fingertip.position)
                                        : inhand::fingertip_surface_point(chain, ws, nrm);
         inhand::point_jacobian(ws, contact, J);
-        servo.update(desired_velocity[static_cast<std::size_t>(i)], S(1), S(0.8), nrm, true, S(1e-3), cmd);
+        servo.update(desired_velocity[static_cast<std::size_t>(i)], S(1), S(0.8), nrm, true,
+                     S(1e-3), cmd);
         const auto r1 = ik.solve(J, cmd.total, limits, qd);
         const auto r2 = ik.solve(J, cmd.total, limits, z, qd_ns);
         const auto r3 = ik.pseudo_inverse(J, pinv);
@@ -194,8 +197,10 @@ TYPED_TEST(NoAllocationTest, PerTickPathDoesNotAllocate) {
     }
     EXPECT_EQ(counted, 0) << "operator new called inside the per-tick path (" << n << " joints)";
     EXPECT_TRUE(std::isfinite(checksum));
-    EXPECT_TRUE(seen & static_cast<unsigned>(inhand::IkStatus::damped)) << "damped branch not exercised";
-    EXPECT_TRUE(seen & static_cast<unsigned>(inhand::IkStatus::limited)) << "limited branch not exercised";
+    EXPECT_TRUE(seen & static_cast<unsigned>(inhand::IkStatus::damped))
+        << "damped branch not exercised";
+    EXPECT_TRUE(seen & static_cast<unsigned>(inhand::IkStatus::limited))
+        << "limited branch not exercised";
     EXPECT_FALSE(seen & static_cast<unsigned>(inhand::IkStatus::invalid_input));
   }
 }

@@ -15,7 +15,6 @@
 // raise FE_INVALID for quiet NaN; that is checked under the traps as well.
 // Not run under valgrind, whose CPU emulation ignores the trap mask.
 #include <fenv.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -44,7 +43,10 @@ class TrapGuard {
   }
   TrapGuard(const TrapGuard&) = delete;
   TrapGuard& operator=(const TrapGuard&) = delete;
-  bool armed() const { return previous_ != -1 && (fegetexcept() & (FE_INVALID | FE_DIVBYZERO)) == (FE_INVALID | FE_DIVBYZERO); }
+  bool armed() const {
+    return previous_ != -1 &&
+           (fegetexcept() & (FE_INVALID | FE_DIVBYZERO)) == (FE_INVALID | FE_DIVBYZERO);
+  }
 
  private:
   int previous_ = -1;
@@ -169,7 +171,8 @@ TEST(FpTraps, ServoPiPlannerTrajectory) {
   for (int k = 0; k < 2000; ++k) {
     const double t = 1e-3 * k;
     const Eigen::Vector3d n = Eigen::Vector3d(std::sin(t), 1.0, 0.1 * std::cos(t)).normalized();
-    const Eigen::Vector3d v = (k % 500 == 0) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(std::sin(3 * t), 0.01, -0.02);
+    const Eigen::Vector3d v =
+        (k % 500 == 0) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(std::sin(3 * t), 0.01, -0.02);
     servo.update(v, 1.0, 1.0 + std::sin(5 * t), n, (k / 100) % 2 == 0, 1e-3, cmd);
     pi.update(v, 1e-3, u);
     touching << (k % 3 != 0), 1, (k % 7 != 0), (k % 400 < 300);
@@ -192,9 +195,9 @@ TEST(FpTraps, ClosedLoopPaperScenario) {
   using namespace inhand::plant;
   ScenarioSpec spec = paper_scenario(PaperObject::cylinder, PaperTask::rotate, 0, 0.6);
   ASSERT_EQ(spec.stages.size(), 3u);
-  spec.stages[0].duration = 2.0;   // grasp timeout
-  spec.stages[1].duration = 0.2;   // hold
-  spec.stages[2].settle = 0.2;     // manipulate: 0.6 s cycle + 0.2 s settle
+  spec.stages[0].duration = 2.0;  // grasp timeout
+  spec.stages[1].duration = 0.2;  // hold
+  spec.stages[2].settle = 0.2;    // manipulate: 0.6 s cycle + 0.2 s settle
   long ticks = 0, manipulation_ticks = 0;
   ScenarioResult result;
   {

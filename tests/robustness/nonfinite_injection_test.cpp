@@ -75,7 +75,8 @@ struct FailureLog {
     if (++count <= kMaxReported) ADD_FAILURE() << what;
   }
   ~FailureLog() {
-    if (count > kMaxReported) ADD_FAILURE() << (count - kMaxReported) << " further failures not shown";
+    if (count > kMaxReported)
+      ADD_FAILURE() << (count - kMaxReported) << " further failures not shown";
   }
 };
 
@@ -115,19 +116,22 @@ void for_each_input_scalar(typename Ctrl::Input& in, Visit&& visit) {
     each_coeff(f.joint_positions, p + "joint_positions", [&](const std::string& n, auto& x) {
       visit(Slot{InputField::joint_positions, i, n, Read::always}, x);
     });
-    each_coeff(f.contact.contact_point, p + "contact.contact_point", [&](const std::string& n, auto& x) {
-      visit(Slot{InputField::contact_point, i, n, Read::if_touching}, x);
-    });
+    each_coeff(f.contact.contact_point, p + "contact.contact_point",
+               [&](const std::string& n, auto& x) {
+                 visit(Slot{InputField::contact_point, i, n, Read::if_touching}, x);
+               });
     each_coeff(f.contact.normal, p + "contact.normal", [&](const std::string& n, auto& x) {
       visit(Slot{InputField::contact_normal, i, n, Read::if_touching}, x);
     });
-    visit(Slot{InputField::normal_force, i, p + "contact.normal_force", Read::if_touching}, f.contact.normal_force);
+    visit(Slot{InputField::normal_force, i, p + "contact.normal_force", Read::if_touching},
+          f.contact.normal_force);
     each_coeff(f.jacobian, p + "jacobian", [&](const std::string& n, auto& x) {
       visit(Slot{InputField::jacobian, i, n, Read::if_external}, x);
     });
-    each_coeff(f.virtual_contact_point, p + "virtual_contact_point", [&](const std::string& n, auto& x) {
-      visit(Slot{InputField::virtual_contact_point, i, n, Read::if_external_not_touching}, x);
-    });
+    each_coeff(
+        f.virtual_contact_point, p + "virtual_contact_point", [&](const std::string& n, auto& x) {
+          visit(Slot{InputField::virtual_contact_point, i, n, Read::if_external_not_touching}, x);
+        });
   }
 }
 
@@ -153,10 +157,14 @@ bool is_read(const Slot& s, const inhand_rob::Rig<Ctrl>& rig, const Pattern& tou
   const bool t = touching[static_cast<std::size_t>(s.finger)];
   const bool ext = rig.external(s.finger);
   switch (s.read) {
-    case Read::always: return true;
-    case Read::if_touching: return t;
-    case Read::if_external: return ext;
-    case Read::if_external_not_touching: return ext && !t;
+    case Read::always:
+      return true;
+    case Read::if_touching:
+      return t;
+    case Read::if_external:
+      return ext;
+    case Read::if_external_not_touching:
+      return ext && !t;
   }
   return true;
 }
@@ -224,13 +232,14 @@ Warm<Ctrl> warm_up(const inhand_rob::Rig<Ctrl>& rig, Phase phase, const Pattern&
   EXPECT_TRUE(inhand_rob::start_grasp(w.ctl, r));
   w.out = w.ctl.make_output();
   if (phase == Phase::manipulation) {
-    EXPECT_TRUE(inhand_rob::complete_grasp_and_manipulate(w.ctl, r, typename Ctrl::Scalar(5e-4), w.out));
+    EXPECT_TRUE(
+        inhand_rob::complete_grasp_and_manipulate(w.ctl, r, typename Ctrl::Scalar(5e-4), w.out));
   }
   for (int k = 0; k < 6; ++k) {
     const auto in = inhand_rob::nominal_input(r, w.ctl, k, pattern, phase == Phase::grasp);
     const ControllerStatus st = w.ctl.update(in, w.out);
-    EXPECT_NE(st, ControllerStatus::invalid_input) << "warm-up tick " << k << " fault "
-                                                   << inhand::to_string(w.out.fault.field);
+    EXPECT_NE(st, ControllerStatus::invalid_input)
+        << "warm-up tick " << k << " fault " << inhand::to_string(w.out.fault.field);
   }
   w.next_tick = 6;
   return w;
@@ -262,10 +271,12 @@ TYPED_TEST(ControllerInjection, EveryScalarEveryPoisonEveryPhase) {
   }
 
   for (Phase phase : {Phase::grasp, Phase::manipulation}) {
-    for (const Pattern& pattern : {inhand_rob::all_touching(n), inhand_rob::alternate_touching(n)}) {
+    for (const Pattern& pattern :
+         {inhand_rob::all_touching(n), inhand_rob::alternate_touching(n)}) {
       const Warm<Ctrl> warm = warm_up(rig, phase, pattern);
       const bool grasp_phase = phase == Phase::grasp;
-      const auto clean = inhand_rob::nominal_input(rig, warm.ctl, warm.next_tick, pattern, grasp_phase);
+      const auto clean =
+          inhand_rob::nominal_input(rig, warm.ctl, warm.next_tick, pattern, grasp_phase);
       const std::vector<Slot> slots = input_slots<Ctrl>(clean);
       for (std::size_t si = 0; si < slots.size(); ++si) {
         const Slot& slot = slots[si];
@@ -287,42 +298,52 @@ TYPED_TEST(ControllerInjection, EveryScalarEveryPoisonEveryPhase) {
               log.fail(what + ": status " + inhand::to_string(st) + ", expected invalid_input");
             if (out_a.fault.field != slot.field || out_a.fault.finger != slot.finger)
               log.fail(what + ": fault " + inhand::to_string(out_a.fault.field) + " finger " +
-                       std::to_string(out_a.fault.finger) + ", expected " + inhand::to_string(slot.field) +
-                       " finger " + std::to_string(slot.finger));
-            if (out_a.warnings != inhand::ControllerWarning::none) log.fail(what + ": warnings raised");
+                       std::to_string(out_a.fault.finger) + ", expected " +
+                       inhand::to_string(slot.field) + " finger " + std::to_string(slot.finger));
+            if (out_a.warnings != inhand::ControllerWarning::none)
+              log.fail(what + ": warnings raised");
             for (int i = 0; i < n; ++i) {
               const auto& fo = out_a.fingers[static_cast<std::size_t>(i)];
-              const bool zero = fo.joint_velocities.size() == rig.chain(i).dof() &&
-                                (fo.joint_velocities.array() == S(0)).all() &&
-                                (fo.desired_contact_velocity.array() == S(0)).all() &&
-                                fo.desired_normal_force == S(0) && (fo.servo.total.array() == S(0)).all() &&
-                                (fo.servo.motion.array() == S(0)).all() && (fo.servo.force.array() == S(0)).all();
+              const bool zero =
+                  fo.joint_velocities.size() == rig.chain(i).dof() &&
+                  (fo.joint_velocities.array() == S(0)).all() &&
+                  (fo.desired_contact_velocity.array() == S(0)).all() &&
+                  fo.desired_normal_force == S(0) && (fo.servo.total.array() == S(0)).all() &&
+                  (fo.servo.motion.array() == S(0)).all() && (fo.servo.force.array() == S(0)).all();
               if (!zero) log.fail(what + ": finger " + std::to_string(i) + " fallback is not zero");
               if (fo.state != warm.out.fingers[static_cast<std::size_t>(i)].state)
                 log.fail(what + ": finger state changed on an invalid tick");
             }
-            if (!(out_a.commanded_twist.array() == S(0)).all() || !(out_a.feedforward_twist.array() == S(0)).all())
+            if (!(out_a.commanded_twist.array() == S(0)).all() ||
+                !(out_a.feedforward_twist.array() == S(0)).all())
               log.fail(what + ": twists not zeroed");
             // Frozen state: the next valid tick equals the twin's (which skipped the bad one).
             const ControllerStatus sa = a.update(clean, out_a);
             const ControllerStatus sb = twin.update(clean, out_t);
             if (sa != sb || sa == ControllerStatus::invalid_input)
-              log.fail(what + ": recovery status " + inhand::to_string(sa) + " vs twin " + inhand::to_string(sb));
-            if (!inhand_rob::same_output<Ctrl>(out_a, out_t)) log.fail(what + ": state not frozen (next tick differs)");
+              log.fail(what + ": recovery status " + inhand::to_string(sa) + " vs twin " +
+                       inhand::to_string(sb));
+            if (!inhand_rob::same_output<Ctrl>(out_a, out_t))
+              log.fail(what + ": state not frozen (next tick differs)");
           } else {
             ++ignored;
             const ControllerStatus sb = twin.update(clean, out_t);
-            if (st != sb) log.fail(what + ": ignored field changed the status to " + inhand::to_string(st));
-            if (!inhand_rob::same_output<Ctrl>(out_a, out_t)) log.fail(what + ": ignored field changed the output");
+            if (st != sb)
+              log.fail(what + ": ignored field changed the status to " + inhand::to_string(st));
+            if (!inhand_rob::same_output<Ctrl>(out_a, out_t))
+              log.fail(what + ": ignored field changed the output");
           }
           // Recovery goes on: three more clean ticks, bit-identical to the twin.
           for (int k = 1; k <= 3; ++k) {
-            const auto next = inhand_rob::nominal_input(rig, warm.ctl, warm.next_tick + k, pattern, grasp_phase);
+            const auto next =
+                inhand_rob::nominal_input(rig, warm.ctl, warm.next_tick + k, pattern, grasp_phase);
             const ControllerStatus sa = a.update(next, out_a);
             const ControllerStatus sb = twin.update(next, out_t);
-            if (sa != sb || sa == ControllerStatus::invalid_input || !inhand_rob::same_output<Ctrl>(out_a, out_t) ||
+            if (sa != sb || sa == ControllerStatus::invalid_input ||
+                !inhand_rob::same_output<Ctrl>(out_a, out_t) ||
                 !inhand_rob::output_finite<Ctrl>(out_a)) {
-              log.fail(what + ": tick +" + std::to_string(k) + " after the injection differs from the twin");
+              log.fail(what + ": tick +" + std::to_string(k) +
+                       " after the injection differs from the twin");
               break;
             }
           }
@@ -374,9 +395,11 @@ TYPED_TEST(ControllerInjection, AbsurdFiniteMagnitudesKeepTheCommandBounded) {
   FailureLog log;
   int cases = 0;
   for (Phase phase : {Phase::grasp, Phase::manipulation}) {
-    for (const Pattern& pattern : {inhand_rob::all_touching(n), inhand_rob::alternate_touching(n)}) {
+    for (const Pattern& pattern :
+         {inhand_rob::all_touching(n), inhand_rob::alternate_touching(n)}) {
       const Warm<Ctrl> warm = warm_up(rig, phase, pattern);
-      const auto clean = inhand_rob::nominal_input(rig, warm.ctl, warm.next_tick, pattern, phase == Phase::grasp);
+      const auto clean =
+          inhand_rob::nominal_input(rig, warm.ctl, warm.next_tick, pattern, phase == Phase::grasp);
       const std::vector<Slot> slots = input_slots<Ctrl>(clean);
       for (std::size_t si = 0; si < slots.size(); ++si) {
         for (S value : huge) {
@@ -389,16 +412,19 @@ TYPED_TEST(ControllerInjection, AbsurdFiniteMagnitudesKeepTheCommandBounded) {
           for (int rep = 0; rep < 2; ++rep) {
             if (rep == 1) bad.time += S(1e-3);
             const ControllerStatus st = a.update(bad, out);
-            const bool zero_ok = st != ControllerStatus::invalid_input ||
-                                 std::all_of(out.fingers.begin(), out.fingers.end(), [](const auto& f) {
-                                   return (f.joint_velocities.array() == S(0)).all();
-                                 });
+            const bool zero_ok =
+                st != ControllerStatus::invalid_input ||
+                std::all_of(out.fingers.begin(), out.fingers.end(), [](const auto& f) {
+                  return (f.joint_velocities.array() == S(0)).all();
+                });
             bool finite = true;
-            for (const auto& f : out.fingers) finite = finite && inhand::all_finite(f.joint_velocities);
+            for (const auto& f : out.fingers)
+              finite = finite && inhand::all_finite(f.joint_velocities);
             if (!finite || !inhand_rob::within_limits(rig, out) || !zero_ok) {
               std::ostringstream o;
-              o << describe<Ctrl>(rig.name, phase, pattern, slots[si], "huge") << " (" << value << ") tick " << rep
-                << ": command not finite/bounded, status " << inhand::to_string(st);
+              o << describe<Ctrl>(rig.name, phase, pattern, slots[si], "huge") << " (" << value
+                << ") tick " << rep << ": command not finite/bounded, status "
+                << inhand::to_string(st);
               log.fail(o.str());
               break;
             }
@@ -451,14 +477,16 @@ struct IkCase {
   static constexpr int kDim = Dim;
   static constexpr int kRun = RunDof;
   static std::string name() {
-    return std::string(std::is_same<S, float>::value ? "float_" : "double_") + std::to_string(Dim) + "x" +
-           std::to_string(RunDof) + (Dof == inhand::Dynamic ? (MaxDof == inhand::Dynamic ? "_dynamic" : "_bounded") : "");
+    return std::string(std::is_same<S, float>::value ? "float_" : "double_") + std::to_string(Dim) +
+           "x" + std::to_string(RunDof) +
+           (Dof == inhand::Dynamic ? (MaxDof == inhand::Dynamic ? "_dynamic" : "_bounded") : "");
   }
 };
 template <typename C>
 class IkInjection : public ::testing::Test {};
-using IkCases = ::testing::Types<IkCase<double, 3, 4, 4, 4>, IkCase<float, 3, 3, 3, 3>, IkCase<double, 2, 3, 3, 3>,
-                                 IkCase<double, 3, 2, 2, 2>, IkCase<double, 3, inhand::Dynamic, 6, 5>,
+using IkCases = ::testing::Types<IkCase<double, 3, 4, 4, 4>, IkCase<float, 3, 3, 3, 3>,
+                                 IkCase<double, 2, 3, 3, 3>, IkCase<double, 3, 2, 2, 2>,
+                                 IkCase<double, 3, inhand::Dynamic, 6, 5>,
                                  IkCase<double, 3, inhand::Dynamic, inhand::Dynamic, 4>>;
 struct IkNames {
   template <typename C>
@@ -509,13 +537,14 @@ TYPED_TEST(IkInjection, SolveRejectsEveryPoisonedScalar) {
         if (target == 1) xd2(k) = poison.value;
         if (target == 2) limit2(k) = poison.value;
         if (target == 3) z2(k) = poison.value;
-        const std::string what = std::string("target ") + std::to_string(target) + " coeff " + std::to_string(k) +
-                                 " = " + poison.name;
+        const std::string what = std::string("target ") + std::to_string(target) + " coeff " +
+                                 std::to_string(k) + " = " + poison.name;
         Ik ik(n);
         typename Ik::JointVector q = Ik::JointVector::Constant(n, S(7));
         inhand::IkReport<S> rep;
         const bool with_z = target == 3;
-        EXPECT_NO_THROW(rep = with_z ? ik.solve(J2, xd2, limit2, z2, q) : ik.solve(J2, xd2, limit2, q));
+        EXPECT_NO_THROW(rep = with_z ? ik.solve(J2, xd2, limit2, z2, q)
+                                     : ik.solve(J2, xd2, limit2, q));
         // A limit of +inf is documented as "no limit": valid, identical to a huge limit.
         const bool no_limit = target == 2 && poison.value == std::numeric_limits<S>::infinity();
         if (no_limit) {
@@ -527,8 +556,10 @@ TYPED_TEST(IkInjection, SolveRejectsEveryPoisonedScalar) {
           if (inhand::has(rep.status, inhand::IkStatus::invalid_input) || !same_bits(q, q3))
             log.fail(what + ": +inf limit is not treated as no limit");
         } else {
-          if (!inhand::has(rep.status, inhand::IkStatus::invalid_input)) log.fail(what + ": not rejected");
-          if (q.size() != n || !(q.array() == S(0)).all()) log.fail(what + ": fallback is not zero");
+          if (!inhand::has(rep.status, inhand::IkStatus::invalid_input))
+            log.fail(what + ": not rejected");
+          if (q.size() != n || !(q.array() == S(0)).all())
+            log.fail(what + ": fallback is not zero");
         }
         if (!inhand::all_finite(q)) log.fail(what + ": non-finite output");
         // Recovery: the same solver on the clean input matches the reference bit for bit.
@@ -536,7 +567,8 @@ TYPED_TEST(IkInjection, SolveRejectsEveryPoisonedScalar) {
         ik.solve(J, xd, limit, q2);
         if (!same_bits(q2, q_ref)) log.fail(what + ": solve after the poison differs");
         ik.solve(J, xd, limit, z, q2);
-        if (!same_bits(q2, q_ref_ns)) log.fail(what + ": null-space solve after the poison differs");
+        if (!same_bits(q2, q_ref_ns))
+          log.fail(what + ": null-space solve after the poison differs");
       }
     }
   }
@@ -553,7 +585,8 @@ TYPED_TEST(IkInjection, PseudoInverseRejectsEveryPoisonedScalar) {
   for (int c = 0; c < n; ++c)
     for (int r = 0; r < Dim; ++r) J(r, c) = inhand_test::uniform<S>(rng, S(-0.08), S(0.08));
   Ik ref(n);
-  typename Ik::PseudoInverse p_ref = Ik::PseudoInverse::Zero(n, Dim), p = Ik::PseudoInverse::Zero(n, Dim);
+  typename Ik::PseudoInverse p_ref = Ik::PseudoInverse::Zero(n, Dim),
+                             p = Ik::PseudoInverse::Zero(n, Dim);
   ref.pseudo_inverse(J, p_ref);
   ASSERT_TRUE(inhand::all_finite(p_ref));
   for (int k = 0; k < Dim * n; ++k) {
@@ -563,7 +596,8 @@ TYPED_TEST(IkInjection, PseudoInverseRejectsEveryPoisonedScalar) {
       Ik ik(n);
       p.setConstant(S(7));
       const auto rep = ik.pseudo_inverse(J2, p);
-      EXPECT_TRUE(inhand::has(rep.status, inhand::IkStatus::invalid_input)) << k << " " << poison.name;
+      EXPECT_TRUE(inhand::has(rep.status, inhand::IkStatus::invalid_input))
+          << k << " " << poison.name;
       EXPECT_TRUE((p.array() == S(0)).all()) << k << " " << poison.name;
       ik.pseudo_inverse(J, p);
       EXPECT_TRUE(same_bits(p, p_ref)) << k << " " << poison.name;
@@ -581,7 +615,8 @@ struct ServoCase {
 };
 template <typename C>
 class ServoInjection : public ::testing::Test {};
-using ServoCases = ::testing::Types<ServoCase<double, 3>, ServoCase<float, 3>, ServoCase<double, 2>>;
+using ServoCases =
+    ::testing::Types<ServoCase<double, 3>, ServoCase<float, 3>, ServoCase<double, 2>>;
 TYPED_TEST_SUITE(ServoInjection, ServoCases);
 
 TYPED_TEST(ServoInjection, ServoRejectsEveryReadScalarAndFreezesIntegrators) {
@@ -596,7 +631,8 @@ TYPED_TEST(ServoInjection, ServoRejectsEveryReadScalarAndFreezesIntegrators) {
   inhand::ServoCommand<S, Dim> cmd;
   // Warm-up: non-zero integrators.
   Vec v0 = Vec::Constant(S(0.01)), n0 = Vec::UnitY();
-  for (int k = 0; k < 20; ++k) warm.update(v0 * S(1 + 0.1 * k), S(1), S(0.7), n0, true, S(1e-3), cmd);
+  for (int k = 0; k < 20; ++k)
+    warm.update(v0 * S(1 + 0.1 * k), S(1), S(0.7), n0, true, S(1e-3), cmd);
   static_assert(noexcept(warm.update(v0, S(1), S(1), n0, true, S(1e-3), cmd)), "noexcept");
   FailureLog log;
   int injected = 0;
@@ -629,7 +665,8 @@ TYPED_TEST(ServoInjection, ServoRejectsEveryReadScalarAndFreezesIntegrators) {
         inhand::ServoCommand<S, Dim> ca, ct;
         inhand::ServoStatus st = inhand::ServoStatus::ok;
         EXPECT_NO_THROW(st = a.update(v, fd, fm, nrm, force_active, dt, ca));
-        if (!inhand::all_finite(ca.total) || !inhand::all_finite(ca.motion) || !inhand::all_finite(ca.force))
+        if (!inhand::all_finite(ca.total) || !inhand::all_finite(ca.motion) ||
+            !inhand::all_finite(ca.force))
           log.fail(what + ": non-finite command");
         if (read) {
           if (st != inhand::ServoStatus::invalid_input) log.fail(what + ": not rejected");
@@ -678,8 +715,10 @@ TYPED_TEST(ServoInjection, PiRejectsEveryScalarAndFreezesIntegral) {
       Pi a = warm, twin = warm;
       Vec x = Vec::Constant(S(0.3));
       S dt = S(1e-3);
-      if (k < Dim) x(k) = poison.value;
-      else dt = poison.value;
+      if (k < Dim)
+        x(k) = poison.value;
+      else
+        dt = poison.value;
       Vec ua = Vec::Constant(S(9)), ut = Vec::Zero();
       EXPECT_EQ(a.update(x, dt, ua), inhand::PiStatus::invalid_input) << k << poison.name;
       EXPECT_TRUE((ua.array() == S(0)).all()) << k << poison.name;
@@ -729,19 +768,23 @@ TEST(PlannerInjection, RejectsTouchingNormalsAndDtIgnoresOthers) {
       residual.setConstant(9);
       inhand::ForcePlanStatus st = inhand::ForcePlanStatus::ok;
       EXPECT_NO_THROW(st = a.plan(touching, nrm, dt, desired, residual));
-      if (!inhand::all_finite(desired) || !inhand::all_finite(residual)) log.fail(what + ": non-finite output");
+      if (!inhand::all_finite(desired) || !inhand::all_finite(residual))
+        log.fail(what + ": non-finite output");
       Planner::ForceVector d2 = Planner::ForceVector::Zero();
       Eigen::Vector3d r2 = Eigen::Vector3d::Zero();
       if (read) {
         // Documented fallback: the last plan, zero residual, state untouched.
-        if (!inhand::has(st, inhand::ForcePlanStatus::invalid_input)) log.fail(what + ": not rejected");
-        if (!same_bits(desired, last) || !(residual.array() == 0.0).all()) log.fail(what + ": fallback differs");
+        if (!inhand::has(st, inhand::ForcePlanStatus::invalid_input))
+          log.fail(what + ": not rejected");
+        if (!same_bits(desired, last) || !(residual.array() == 0.0).all())
+          log.fail(what + ": fallback differs");
         a.plan(touching, normals, 1e-3, desired, residual);
         twin.plan(touching, normals, 1e-3, d2, r2);
       } else {
         twin.plan(touching, normals, 1e-3, d2, r2);
       }
-      if (!same_bits(desired, d2) || !same_bits(residual, r2)) log.fail(what + ": differs from the twin");
+      if (!same_bits(desired, d2) || !same_bits(residual, r2))
+        log.fail(what + ": differs from the twin");
     }
   }
 }
@@ -763,7 +806,8 @@ TYPED_TEST(KinematicsInjection, PoisonPropagatesAndWorkspaceRecovers) {
   const typename Chain::JointVector q = inhand_test::random_joint_angles(chain, rng);
   inhand::FingerKinematics<Chain> ref(chain), ws(chain);
   inhand::forward_kinematics(chain, q, ref);
-  const inhand::Vector<S, Dim> point = ref.fingertip.position + inhand::Vector<S, Dim>::Constant(S(0.004));
+  const inhand::Vector<S, Dim> point =
+      ref.fingertip.position + inhand::Vector<S, Dim>::Constant(S(0.004));
   typename Chain::Jacobian J_ref = Chain::Jacobian::Zero(Dim, chain.dof()), J = J_ref;
   inhand::point_jacobian(ref, point, J_ref);
   static_assert(noexcept(inhand::forward_kinematics(chain, q, ws)), "noexcept");
@@ -785,7 +829,8 @@ TYPED_TEST(KinematicsInjection, PoisonPropagatesAndWorkspaceRecovers) {
       auto p2 = point;
       p2(d) = poison.value;
       inhand::point_jacobian(ref, p2, J);
-      EXPECT_FALSE(inhand::all_finite(J)) << "point(" << d << ") = " << poison.name << " was masked";
+      EXPECT_FALSE(inhand::all_finite(J))
+          << "point(" << d << ") = " << poison.name << " was masked";
       inhand::point_jacobian(ref, point, J);
       EXPECT_TRUE(same_bits(J, J_ref));
     }
@@ -814,14 +859,17 @@ TEST(TrajectoryInjection, NonFiniteTimeHoldsAnEndPose) {
     EXPECT_TRUE((s.twist.array() == 0.0).all()) << poison.name;
     if (poison.value == std::numeric_limits<double>::infinity()) {
       EXPECT_EQ(s.segment, -1);
-      EXPECT_TRUE(same_bits(s.pose.position, end.pose.position) && same_bits(s.pose.rotation, end.pose.rotation));
+      EXPECT_TRUE(same_bits(s.pose.position, end.pose.position) &&
+                  same_bits(s.pose.rotation, end.pose.rotation));
     } else {  // NaN and -inf: before the start
       EXPECT_EQ(s.segment, 0) << poison.name;
-      EXPECT_TRUE(same_bits(s.pose.position, start.position) && same_bits(s.pose.rotation, start.rotation))
+      EXPECT_TRUE(same_bits(s.pose.position, start.position) &&
+                  same_bits(s.pose.rotation, start.rotation))
           << poison.name;
     }
     const auto again = traj.evaluate(0.3);  // const: nothing to recover, but nothing changed
-    EXPECT_TRUE(same_bits(again.pose.position, mid.pose.position) && same_bits(again.twist, mid.twist));
+    EXPECT_TRUE(same_bits(again.pose.position, mid.pose.position) &&
+                same_bits(again.twist, mid.twist));
   }
 }
 

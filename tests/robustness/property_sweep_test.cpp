@@ -44,7 +44,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 template <typename S>
 S pick_limit(Rng& rng, S lo, S hi) {  // +inf half of the time
-  return uniform<double>(rng, 0, 1) < 0.5 ? std::numeric_limits<S>::infinity() : log_uniform<S>(rng, lo, hi);
+  return uniform<double>(rng, 0, 1) < 0.5 ? std::numeric_limits<S>::infinity()
+                                          : log_uniform<S>(rng, lo, hi);
 }
 
 /// A random valid serial finger of `dof` joints (planar: axes +-z).
@@ -94,12 +95,13 @@ void randomise_config(typename Ctrl::Config& c, Rng& rng, bool settle_zero) {
   pf.orientation_integral_limit = log_uniform<S>(rng, S(1e-3), S(1e-1));
   pf.max_linear_speed = log_uniform<S>(rng, S(1e-3), S(0.5));
   pf.max_angular_speed = log_uniform<S>(rng, S(0.05), S(5));
-  c.servo.motion = {uniform<S>(rng, S(0.2), S(3)), uniform<S>(rng, S(0), S(10)), pick_limit<S>(rng, S(1e-3), S(1)),
-                    pick_limit<S>(rng, S(1e-2), S(1))};
-  c.servo.force = {uniform<S>(rng, S(0), S(0.1)), uniform<S>(rng, S(0), S(1)), pick_limit<S>(rng, S(1e-2), S(10)),
-                   pick_limit<S>(rng, S(1e-3), S(0.5))};
+  c.servo.motion = {uniform<S>(rng, S(0.2), S(3)), uniform<S>(rng, S(0), S(10)),
+                    pick_limit<S>(rng, S(1e-3), S(1)), pick_limit<S>(rng, S(1e-2), S(1))};
+  c.servo.force = {uniform<S>(rng, S(0), S(0.1)), uniform<S>(rng, S(0), S(1)),
+                   pick_limit<S>(rng, S(1e-2), S(10)), pick_limit<S>(rng, S(1e-3), S(0.5))};
   c.ik.damping.singular_threshold = log_uniform<S>(rng, S(1e-4), S(5e-2));
-  c.ik.damping.max_damping = uniform<double>(rng, 0, 1) < 0.1 ? S(0) : log_uniform<S>(rng, S(1e-4), S(5e-2));
+  c.ik.damping.max_damping =
+      uniform<double>(rng, 0, 1) < 0.1 ? S(0) : log_uniform<S>(rng, S(1e-4), S(5e-2));
   auto& fp = c.force_planner;
   fp.nominal_force = uniform<S>(rng, S(0.2), S(3));
   fp.min_force = fp.nominal_force * uniform<S>(rng, S(0), S(1));
@@ -117,7 +119,8 @@ void randomise_config(typename Ctrl::Config& c, Rng& rng, bool settle_zero) {
   g.force_tolerance = uniform<S>(rng, S(0.02), S(0.5));
   g.settle_time = settle_zero ? S(0) : uniform<S>(rng, S(0), S(0.2));
   for (auto& f : c.fingers)
-    f.kinematics = uniform<double>(rng, 0, 1) < 0.3 ? Ctrl::KinematicsSource::external : Ctrl::KinematicsSource::chain;
+    f.kinematics = uniform<double>(rng, 0, 1) < 0.3 ? Ctrl::KinematicsSource::external
+                                                    : Ctrl::KinematicsSource::chain;
 }
 
 /// A random trajectory of 1 to 4 segments from `start`.
@@ -128,41 +131,52 @@ inhand::ObjectTrajectory<S, Dim> random_trajectory(Rng& rng, const inhand::Pose<
   const int n = static_cast<int>(uniform<double>(rng, 1, 4.999));
   for (int i = 0; i < n; ++i) {
     inhand::Twist<S, Dim> d;
-    for (int k = 0; k < d.size(); ++k) d(k) = k < Dim ? uniform<S>(rng, S(-0.01), S(0.01)) : uniform<S>(rng, S(-0.3), S(0.3));
+    for (int k = 0; k < d.size(); ++k)
+      d(k) = k < Dim ? uniform<S>(rng, S(-0.01), S(0.01)) : uniform<S>(rng, S(-0.3), S(0.3));
     const S dur = log_uniform<S>(rng, S(0.005), S(2));
     const int kind = static_cast<int>(uniform<double>(rng, 0, 3.999));
     if (kind == 0) t.append(inhand::TrajectorySegment<S, Dim>::hold_for(dur));
-    if (kind == 1) t.append(inhand::TrajectorySegment<S, Dim>::move(d.template head<Dim>(), d.template head<Dim>().norm(), dur));
+    if (kind == 1)
+      t.append(inhand::TrajectorySegment<S, Dim>::move(d.template head<Dim>(),
+                                                       d.template head<Dim>().norm(), dur));
     if (kind == 2) {
       inhand::AngularVector<S, Dim> w = d.template tail<inhand::SpatialDim<Dim>::kRot>();
       t.append(inhand::TrajectorySegment<S, Dim>::rotate(w, w.norm(), dur));
     }
-    if (kind == 3) t.append(inhand::TrajectorySegment<S, Dim>::reciprocate(d, dur, 1 + static_cast<int>(uniform<double>(rng, 0, 2.999))));
+    if (kind == 3)
+      t.append(inhand::TrajectorySegment<S, Dim>::reciprocate(
+          d, dur, 1 + static_cast<int>(uniform<double>(rng, 0, 2.999))));
   }
   return t;
 }
 
 /// One random valid tick near the rig's grasp.
 template <typename Ctrl>
-void random_tick(const inhand_rob::Rig<Ctrl>& rig, Rng& rng, typename Ctrl::Input& in, bool grasp_phase) {
+void random_tick(const inhand_rob::Rig<Ctrl>& rig, Rng& rng, typename Ctrl::Input& in,
+                 bool grasp_phase) {
   using S = typename Ctrl::Scalar;
   constexpr int Dim = Ctrl::Dim;
   using Vec = inhand::Vector<S, Dim>;
   in.time += uniform<S>(rng, S(1e-5), S(3) * rig.config.max_tick);
-  in.object_pose.position = rig.object.position + inhand_test::random_vector<S, Dim>(rng, S(-5e-3), S(5e-3));
-  const inhand::AngularVector<S, Dim> w = inhand_test::random_vector<S, inhand::SpatialDim<Dim>::kRot>(rng, S(-0.2), S(0.2));
+  in.object_pose.position =
+      rig.object.position + inhand_test::random_vector<S, Dim>(rng, S(-5e-3), S(5e-3));
+  const inhand::AngularVector<S, Dim> w =
+      inhand_test::random_vector<S, inhand::SpatialDim<Dim>::kRot>(rng, S(-0.2), S(0.2));
   in.object_pose.rotation = inhand::rotation_exp<S>(w) * rig.object.rotation;
   for (int i = 0; i < rig.fingers(); ++i) {
     auto& f = in.fingers[static_cast<std::size_t>(i)];
     const auto& t = rig.targets[static_cast<std::size_t>(i)];
     f.joint_positions = inhand_test::random_joint_angles(rig.chain(i), rng);
     f.contact.touching = uniform<double>(rng, 0, 1) < 0.6;
-    f.contact.contact_point = t.contact_point + inhand_test::random_vector<S, Dim>(rng, S(-0.01), S(0.01));
-    Vec n = uniform<double>(rng, 0, 1) < 0.1 ? inhand_test::random_unit_vector<S, Dim>(rng)
-                                            : Vec(t.normal + inhand_test::random_vector<S, Dim>(rng, S(-0.5), S(0.5)));
+    f.contact.contact_point =
+        t.contact_point + inhand_test::random_vector<S, Dim>(rng, S(-0.01), S(0.01));
+    Vec n = uniform<double>(rng, 0, 1) < 0.1
+                ? inhand_test::random_unit_vector<S, Dim>(rng)
+                : Vec(t.normal + inhand_test::random_vector<S, Dim>(rng, S(-0.5), S(0.5)));
     if (!(n.norm() > S(1e-3))) n = t.normal;
     f.contact.normal = n.normalized();
-    f.contact.normal_force = uniform<double>(rng, 0, 1) < 0.05 ? S(0) : uniform<S>(rng, S(0), S(10));
+    f.contact.normal_force =
+        uniform<double>(rng, 0, 1) < 0.05 ? S(0) : uniform<S>(rng, S(0), S(10));
     if (rig.external(i)) {
       inhand_rob::fill_external(rig, i, f, grasp_phase);
       for (int c = 0; c < f.jacobian.cols(); ++c)
@@ -180,7 +194,8 @@ struct SweepStats {
 
 /// Starts `ctl` on the sequence: grasp, or a completed grasp and a trajectory.
 template <typename Ctrl>
-bool start(Ctrl& ctl, const inhand_rob::Rig<Ctrl>& rig, bool manipulate, const inhand::ObjectTrajectory<typename Ctrl::Scalar, Ctrl::Dim>& traj,
+bool start(Ctrl& ctl, const inhand_rob::Rig<Ctrl>& rig, bool manipulate,
+           const inhand::ObjectTrajectory<typename Ctrl::Scalar, Ctrl::Dim>& traj,
            typename Ctrl::Output& out) {
   if (!ctl.start_grasp(rig.targets).ok()) return false;
   if (!manipulate) return true;
@@ -192,12 +207,13 @@ bool start(Ctrl& ctl, const inhand_rob::Rig<Ctrl>& rig, bool manipulate, const i
 /// Runs one random sequence on a rig and checks every property; returns false after
 /// the first violation (reported with the sequence number for reproduction).
 template <typename Ctrl>
-bool run_sequence(const inhand_rob::Rig<Ctrl>& rig, Rng& rng, long seq, int ticks, SweepStats& stats) {
+bool run_sequence(const inhand_rob::Rig<Ctrl>& rig, Rng& rng, long seq, int ticks,
+                  SweepStats& stats) {
   using S = typename Ctrl::Scalar;
   Ctrl a, b;
   if (!a.configure(rig.config).ok() || !b.configure(rig.config).ok()) {
-    ADD_FAILURE() << "sequence " << seq << ": random configuration rejected: "
-                  << Ctrl::validate(rig.config).field;
+    ADD_FAILURE() << "sequence " << seq
+                  << ": random configuration rejected: " << Ctrl::validate(rig.config).field;
     return false;
   }
   const bool manipulate = rig.config.grasp.settle_time == S(0);
@@ -229,8 +245,9 @@ bool run_sequence(const inhand_rob::Rig<Ctrl>& rig, Rng& rng, long seq, int tick
     const double ratio = inhand_rob::worst_limit_ratio(rig, oa);
     stats.worst_ratio = std::max(stats.worst_ratio, ratio);
     if (!inhand_rob::within_limits(rig, oa)) {
-      ADD_FAILURE() << "sequence " << seq << " tick " << k << ": joint velocity limit exceeded, |qdot|/limit = "
-                    << ratio << " (1 + " << (ratio - 1.0) << ")";
+      ADD_FAILURE() << "sequence " << seq << " tick " << k
+                    << ": joint velocity limit exceeded, |qdot|/limit = " << ratio << " (1 + "
+                    << (ratio - 1.0) << ")";
       return false;
     }
     if (sa != sb || !inhand_rob::same_output<Ctrl>(oa, ob)) {
@@ -255,7 +272,8 @@ bool run_sequence(const inhand_rob::Rig<Ctrl>& rig, Rng& rng, long seq, int tick
   }
   for (int k = 0; k < ticks; ++k) {
     const ControllerStatus sc = a.update(inputs[static_cast<std::size_t>(k)], oc);
-    if (sc != statuses[static_cast<std::size_t>(k)] || !inhand_rob::same_output<Ctrl>(oc, outputs[static_cast<std::size_t>(k)])) {
+    if (sc != statuses[static_cast<std::size_t>(k)] ||
+        !inhand_rob::same_output<Ctrl>(oc, outputs[static_cast<std::size_t>(k)])) {
       ADD_FAILURE() << "sequence " << seq << " tick " << k << ": differs after reset()";
       return false;
     }
@@ -273,7 +291,8 @@ SweepStats sweep(std::uint64_t seed, long total_ticks, MakeRig make_rig) {
     inhand_rob::Rig<Ctrl> rig = make_rig(rng);
     const bool manipulate = uniform<double>(rng, 0, 1) < 0.5;
     randomise_config<Ctrl>(rig.config, rng, manipulate);
-    const int ticks = static_cast<int>(std::min<long>(total_ticks - stats.ticks, static_cast<long>(uniform<double>(rng, 5, 40.999))));
+    const int ticks = static_cast<int>(std::min<long>(
+        total_ticks - stats.ticks, static_cast<long>(uniform<double>(rng, 5, 40.999))));
     if (!run_sequence(rig, rng, seq++, ticks, stats)) break;
   }
   return stats;
@@ -313,7 +332,8 @@ TEST(PropertySweep, RandomHandsRunTimeSized) {
     for (int i = 0; i < fingers; ++i) {
       auto& fc = rig.config.fingers[static_cast<std::size_t>(i)];
       fc.chain = random_chain<Ctrl::Chain>(rng, static_cast<int>(uniform<double>(rng, 1, 6.999)));
-      fc.role = uniform<double>(rng, 0, 1) < 0.3 ? inhand::FingerRole::balancing : inhand::FingerRole::preset;
+      fc.role = uniform<double>(rng, 0, 1) < 0.3 ? inhand::FingerRole::balancing
+                                                 : inhand::FingerRole::preset;
       rig.q_nominal.push_back(inhand_test::random_joint_angles(fc.chain, rng));
     }
     rig.config.fingers.back().role = inhand::FingerRole::balancing;
@@ -376,16 +396,21 @@ TEST(PropertySweep, IkGainBoundLimitsAndDeterminism) {
     const Chain chain = random_chain<Chain>(rng, dof);
     inhand::FingerKinematics<Chain> ws(chain);
     inhand::forward_kinematics(chain, inhand_test::random_joint_angles(chain, rng), ws);
-    const Eigen::Vector3d p = ws.fingertip.position + chain.fingertip_radius * inhand_test::random_unit_vector<double, 3>(rng);
+    const Eigen::Vector3d p =
+        ws.fingertip.position +
+        chain.fingertip_radius * inhand_test::random_unit_vector<double, 3>(rng);
     Ik::Jacobian J = Ik::Jacobian::Zero(3, dof);
     inhand::point_jacobian(ws, p, J);
     inhand::IkParams<double> params;
     params.damping.singular_threshold = log_uniform<double>(rng, 1e-4, 5e-2);
     params.damping.max_damping = log_uniform<double>(rng, 1e-5, 5e-2);
-    const Eigen::Vector3d xd = log_uniform<double>(rng, 1e-6, 1.0) * inhand_test::random_unit_vector<double, 3>(rng);
+    const Eigen::Vector3d xd =
+        log_uniform<double>(rng, 1e-6, 1.0) * inhand_test::random_unit_vector<double, 3>(rng);
     Ik a(dof, params), b(dof, params);
-    Ik::JointVector free_a = Ik::JointVector::Zero(dof), free_b = free_a, lim_a = free_a, lim_b = free_a;
-    const Ik::JointVector inf = Ik::JointVector::Constant(dof, std::numeric_limits<double>::infinity());
+    Ik::JointVector free_a = Ik::JointVector::Zero(dof), free_b = free_a, lim_a = free_a,
+                    lim_b = free_a;
+    const Ik::JointVector inf =
+        Ik::JointVector::Constant(dof, std::numeric_limits<double>::infinity());
     const auto ra = a.solve(J, xd, inf, free_a);
     b.solve(J, xd, inf, free_b);
     ASSERT_FALSE(inhand::has(ra.status, inhand::IkStatus::invalid_input)) << "case " << c;
@@ -396,15 +421,18 @@ TEST(PropertySweep, IkGainBoundLimitsAndDeterminism) {
     ASSERT_LE(free_a.norm(), bound * (1.0 + 1e-9)) << "case " << c << ": gain bound violated";
     damped += inhand::has(ra.status, inhand::IkStatus::damped);
     Ik::JointVector limit(dof);
-    for (int j = 0; j < dof; ++j) limit(j) = chain.joints[j].max_velocity * uniform<double>(rng, 1e-3, 1.0);
+    for (int j = 0; j < dof; ++j)
+      limit(j) = chain.joints[j].max_velocity * uniform<double>(rng, 1e-3, 1.0);
     const auto rl = a.solve(J, xd, limit, lim_a);
     b.solve(J, xd, limit, lim_b);
     ASSERT_TRUE(inhand_rob::same_bits(lim_a, lim_b)) << "case " << c;
-    for (int j = 0; j < dof; ++j) ASSERT_LE(std::abs(lim_a(j)), limit(j)) << "case " << c << " joint " << j;
+    for (int j = 0; j < dof; ++j)
+      ASSERT_LE(std::abs(lim_a(j)), limit(j)) << "case " << c << " joint " << j;
     if (inhand::has(rl.status, inhand::IkStatus::limited)) {
       ++limited;
       // Direction kept: lim = s * free.
-      const double dir_err = (lim_a - rl.limit_scale * free_a).norm() / std::max(lim_a.norm(), 1e-300);
+      const double dir_err =
+          (lim_a - rl.limit_scale * free_a).norm() / std::max(lim_a.norm(), 1e-300);
       worst_dir = std::max(worst_dir, dir_err);
       ASSERT_LE(dir_err, 1e-12) << "case " << c;
     }

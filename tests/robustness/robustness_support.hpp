@@ -33,7 +33,8 @@ bool same_bits(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<B>& b) {
   if (a.rows() != b.rows() || a.cols() != b.cols()) return false;
   const auto ea = a.derived().eval();
   const auto eb = b.derived().eval();
-  return std::memcmp(ea.data(), eb.data(), sizeof(typename A::Scalar) * static_cast<std::size_t>(ea.size())) == 0;
+  return std::memcmp(ea.data(), eb.data(),
+                     sizeof(typename A::Scalar) * static_cast<std::size_t>(ea.size())) == 0;
 }
 template <typename S>
 bool same_bits_scalar(S a, S b) {
@@ -58,7 +59,8 @@ struct Rig {
   int fingers() const { return static_cast<int>(config.fingers.size()); }
   const Chain& chain(int i) const { return config.fingers[static_cast<std::size_t>(i)].chain; }
   bool external(int i) const {
-    return config.fingers[static_cast<std::size_t>(i)].kinematics == Ctrl::KinematicsSource::external;
+    return config.fingers[static_cast<std::size_t>(i)].kinematics ==
+           Ctrl::KinematicsSource::external;
   }
 };
 
@@ -74,7 +76,8 @@ template <typename Chain>
 Chain convert_chain(const inhand::plant::PlantFinger& f) {
   using S = typename Chain::Scalar;
   Chain c;
-  if (!c.joints.resize(f.dof())) throw std::invalid_argument("joint count does not fit the chain type");
+  if (!c.joints.resize(f.dof()))
+    throw std::invalid_argument("joint count does not fit the chain type");
   c.base.position = f.base.position.cast<S>();
   c.base.rotation = f.base.rotation.cast<S>();
   for (int j = 0; j < f.dof(); ++j) {
@@ -211,8 +214,8 @@ void fill_external(const Rig<Ctrl>& rig, int i, typename Ctrl::FingerInput& f, b
 
 /// Tick k (k >= 0) of a smooth valid input stream; time = (k + 1) ms.
 template <typename Ctrl>
-typename Ctrl::Input nominal_input(const Rig<Ctrl>& rig, const Ctrl& ctl, int k, const Pattern& touching,
-                                   bool grasp_phase) {
+typename Ctrl::Input nominal_input(const Rig<Ctrl>& rig, const Ctrl& ctl, int k,
+                                   const Pattern& touching, bool grasp_phase) {
   using S = typename Ctrl::Scalar;
   constexpr int Dim = Ctrl::Dim;
   using Vec = inhand::Vector<S, Dim>;
@@ -220,7 +223,8 @@ typename Ctrl::Input nominal_input(const Rig<Ctrl>& rig, const Ctrl& ctl, int k,
   const double kk = static_cast<double>(k);
   in.time = static_cast<S>(1e-3 * (kk + 1.0));
   in.object_pose = rig.object;
-  for (int d = 0; d < Dim; ++d) in.object_pose.position(d) += static_cast<S>(2e-4 * std::sin(0.3 * kk + d));
+  for (int d = 0; d < Dim; ++d)
+    in.object_pose.position(d) += static_cast<S>(2e-4 * std::sin(0.3 * kk + d));
   inhand::AngularVector<S, Dim> w;
   for (int d = 0; d < w.size(); ++d) w(d) = static_cast<S>(5e-3 * std::cos(0.2 * kk + d));
   in.object_pose.rotation = inhand::rotation_exp<S>(w) * rig.object.rotation;
@@ -247,7 +251,8 @@ typename Ctrl::Input nominal_input(const Rig<Ctrl>& rig, const Ctrl& ctl, int k,
 /// The tick that completes a grasp (with settle_time 0): every finger touching exactly
 /// at its target, along the target normal, with the nominal force.
 template <typename Ctrl>
-typename Ctrl::Input perfect_grasp_input(const Rig<Ctrl>& rig, const Ctrl& ctl, typename Ctrl::Scalar time) {
+typename Ctrl::Input perfect_grasp_input(const Rig<Ctrl>& rig, const Ctrl& ctl,
+                                         typename Ctrl::Scalar time) {
   typename Ctrl::Input in = nominal_input(rig, ctl, 0, all_touching(rig.fingers()), true);
   in.time = time;
   in.object_pose = rig.object;
@@ -292,7 +297,8 @@ bool complete_grasp_and_manipulate(Ctrl& ctl, const Rig<Ctrl>& rig, typename Ctr
                                    typename Ctrl::Output& out) {
   const typename Ctrl::Input in = perfect_grasp_input(rig, ctl, time);
   if (ctl.update(in, out) != inhand::ControllerStatus::grasped) return false;
-  return ctl.start_manipulation(test_trajectory<typename Ctrl::Scalar, Ctrl::Dim>(in.object_pose)).ok();
+  return ctl.start_manipulation(test_trajectory<typename Ctrl::Scalar, Ctrl::Dim>(in.object_pose))
+      .ok();
 }
 
 /// Every floating-point member of an Output is finite.
@@ -300,12 +306,13 @@ template <typename Ctrl>
 bool output_finite(const typename Ctrl::Output& out) {
   using inhand::all_finite;
   bool ok = out.desired_object_pose.is_finite() && all_finite(out.feedforward_twist) &&
-            all_finite(out.commanded_twist) && all_finite(out.pose_error) && all_finite(out.force_residual) &&
-            inhand::is_finite(out.manipulation_time);
+            all_finite(out.commanded_twist) && all_finite(out.pose_error) &&
+            all_finite(out.force_residual) && inhand::is_finite(out.manipulation_time);
   for (const auto& f : out.fingers) {
     ok = ok && all_finite(f.joint_velocities) && all_finite(f.desired_contact_velocity) &&
-         inhand::is_finite(f.desired_normal_force) && all_finite(f.servo.motion) && all_finite(f.servo.force) &&
-         all_finite(f.servo.total) && inhand::is_finite(f.ik.min_singular_value) && inhand::is_finite(f.ik.damping) &&
+         inhand::is_finite(f.desired_normal_force) && all_finite(f.servo.motion) &&
+         all_finite(f.servo.force) && all_finite(f.servo.total) &&
+         inhand::is_finite(f.ik.min_singular_value) && inhand::is_finite(f.ik.damping) &&
          inhand::is_finite(f.ik.limit_scale);
   }
   return ok;
@@ -317,8 +324,10 @@ bool same_output(const typename Ctrl::Output& a, const typename Ctrl::Output& b)
   if (a.fingers.size() != b.fingers.size()) return false;
   bool ok = same_bits(a.desired_object_pose.position, b.desired_object_pose.position) &&
             same_bits(a.desired_object_pose.rotation, b.desired_object_pose.rotation) &&
-            same_bits(a.feedforward_twist, b.feedforward_twist) && same_bits(a.commanded_twist, b.commanded_twist) &&
-            same_bits(a.pose_error, b.pose_error) && same_bits(a.force_residual, b.force_residual) &&
+            same_bits(a.feedforward_twist, b.feedforward_twist) &&
+            same_bits(a.commanded_twist, b.commanded_twist) &&
+            same_bits(a.pose_error, b.pose_error) &&
+            same_bits(a.force_residual, b.force_residual) &&
             a.force_plan_status == b.force_plan_status && a.warnings == b.warnings &&
             a.fault.field == b.fault.field && a.fault.finger == b.fault.finger &&
             same_bits_scalar(a.manipulation_time, b.manipulation_time) && a.segment == b.segment;
@@ -330,8 +339,10 @@ bool same_output(const typename Ctrl::Output& a, const typename Ctrl::Output& b)
          same_bits_scalar(x.desired_normal_force, y.desired_normal_force) &&
          same_bits(x.servo.motion, y.servo.motion) && same_bits(x.servo.force, y.servo.force) &&
          same_bits(x.servo.total, y.servo.total) && x.servo_status == y.servo_status &&
-         x.ik.status == y.ik.status && same_bits_scalar(x.ik.min_singular_value, y.ik.min_singular_value) &&
-         same_bits_scalar(x.ik.damping, y.ik.damping) && same_bits_scalar(x.ik.limit_scale, y.ik.limit_scale);
+         x.ik.status == y.ik.status &&
+         same_bits_scalar(x.ik.min_singular_value, y.ik.min_singular_value) &&
+         same_bits_scalar(x.ik.damping, y.ik.damping) &&
+         same_bits_scalar(x.ik.limit_scale, y.ik.limit_scale);
   }
   return ok;
 }

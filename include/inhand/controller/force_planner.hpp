@@ -32,9 +32,9 @@ enum class FingerRole : unsigned char { preset, balancing };
 
 template <typename Scalar>
 struct ForcePlannerParams {
-  Scalar nominal_force = Scalar(1);  ///< N, > 0
-  Scalar min_force = Scalar(0.2);    ///< N, >= 0
-  Scalar max_force = Scalar(6);      ///< N, >= min_force
+  Scalar nominal_force = Scalar(1);      ///< N, > 0
+  Scalar min_force = Scalar(0.2);        ///< N, >= 0
+  Scalar max_force = Scalar(6);          ///< N, >= min_force
   Scalar regularisation = Scalar(1e-3);  ///< rho, dimensionless, > 0
   Scalar filter_time = Scalar(0.02);     ///< s, >= 0 (0: no filtering)
 
@@ -46,7 +46,8 @@ struct ForcePlannerParams {
     if (!is_finite(max_force) || !(max_force >= min_force))
       return Validation::invalid("force_planner.max_force", "must be finite and >= min_force");
     if (!(nominal_force >= min_force && nominal_force <= max_force))
-      return Validation::invalid("force_planner.nominal_force", "must lie in [min_force, max_force]");
+      return Validation::invalid("force_planner.nominal_force",
+                                 "must lie in [min_force, max_force]");
     if (!is_finite(regularisation) || !(regularisation > Scalar(0)))
       return Validation::invalid("force_planner.regularisation", "must be finite and > 0");
     if (!is_finite(filter_time) || !(filter_time >= Scalar(0)))
@@ -57,7 +58,7 @@ struct ForcePlannerParams {
 
 enum class ForcePlanStatus : unsigned {
   ok = 0,
-  limited = 1u << 0,         ///< some balancing force was limited to [min_force, max_force]
+  limited = 1u << 0,               ///< some balancing force was limited to [min_force, max_force]
   no_balancing_contact = 1u << 1,  ///< no balancing finger touches: resultant not balanced
   invalid_input = 1u << 2,
 };
@@ -102,8 +103,8 @@ class ForcePlanner {
   /// `residual`. Invalid input (dt not finite and > 0, or a touching finger's normal
   /// not finite): returns invalid_input, `desired` = the last plan (zero before the
   /// first), `residual` = 0, and nothing else changes.
-  ForcePlanStatus plan(const Mask& touching, const Normals& normals, Scalar dt, ForceVector& desired,
-                       Vector<Scalar, Dim>& residual) noexcept {
+  ForcePlanStatus plan(const Mask& touching, const Normals& normals, Scalar dt,
+                       ForceVector& desired, Vector<Scalar, Dim>& residual) noexcept {
     const int n = size();
     ForcePlanStatus status = ForcePlanStatus::ok;
     if (!is_finite(dt) || !(dt > Scalar(0))) {

@@ -26,8 +26,8 @@ namespace inhand {
 /// Bit flags of an IK solve. `ok` is 0; damped and limited may be combined.
 enum class IkStatus : unsigned {
   ok = 0,
-  damped = 1u << 0,       ///< sigma_min below the threshold: damped least squares used
-  limited = 1u << 1,      ///< joint velocities scaled down to respect their limits
+  damped = 1u << 0,   ///< sigma_min below the threshold: damped least squares used
+  limited = 1u << 1,  ///< joint velocities scaled down to respect their limits
   damped_and_limited = 3u,
   invalid_input = 1u << 2,  ///< non-finite input; output is zero
 };
@@ -39,11 +39,16 @@ constexpr bool has(IkStatus s, IkStatus flag) noexcept {
 }
 inline const char* to_string(IkStatus s) noexcept {
   switch (s) {
-    case IkStatus::ok: return "ok";
-    case IkStatus::damped: return "damped";
-    case IkStatus::limited: return "limited";
-    case IkStatus::damped_and_limited: return "damped_and_limited";
-    case IkStatus::invalid_input: return "invalid_input";
+    case IkStatus::ok:
+      return "ok";
+    case IkStatus::damped:
+      return "damped";
+    case IkStatus::limited:
+      return "limited";
+    case IkStatus::damped_and_limited:
+      return "damped_and_limited";
+    case IkStatus::invalid_input:
+      return "invalid_input";
   }
   return "unknown";
 }

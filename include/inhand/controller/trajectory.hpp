@@ -43,7 +43,8 @@ struct TrajectorySegment {
     s.duration = seconds;
     return s;
   }
-  static TrajectorySegment move(const Vector<Scalar, Dim>& axis, Scalar metres, Scalar seconds) noexcept {
+  static TrajectorySegment move(const Vector<Scalar, Dim>& axis, Scalar metres,
+                                Scalar seconds) noexcept {
     TrajectorySegment s;
     s.kind = SegmentKind::move;
     s.duration = seconds;
@@ -83,8 +84,8 @@ inline void minimum_jerk(Scalar tau, Scalar& s, Scalar& ds) noexcept {
 
 template <typename Scalar, int Dim>
 struct TrajectorySample {
-  Pose<Scalar, Dim> pose{};                                  ///< desired object pose
-  Twist<Scalar, Dim> twist = Twist<Scalar, Dim>::Zero();     ///< feed-forward twist
+  Pose<Scalar, Dim> pose{};                               ///< desired object pose
+  Twist<Scalar, Dim> twist = Twist<Scalar, Dim>::Zero();  ///< feed-forward twist
   int segment = -1;  ///< index of the active segment; -1 after the end (holding the last pose)
 };
 
@@ -113,7 +114,8 @@ class ObjectTrajectory {
   static Validation validate_segment(const Segment& s) noexcept {
     if (!is_finite(s.duration) || !(s.duration > Scalar(0)))
       return Validation::invalid("segment.duration", "must be finite and > 0");
-    if (!all_finite(s.displacement)) return Validation::invalid("segment.displacement", "must be finite");
+    if (!all_finite(s.displacement))
+      return Validation::invalid("segment.displacement", "must be finite");
     if (s.kind == SegmentKind::reciprocate && s.cycles < 1)
       return Validation::invalid("segment.cycles", "must be >= 1");
     return Validation::valid();
@@ -187,7 +189,8 @@ class ObjectTrajectory {
                                      Scalar s) noexcept {
     Pose<Scalar, Dim> p;
     p.position = p0.position + s * d.template head<Dim>();
-    p.rotation = rotation_exp<Scalar>(AngularVector<Scalar, Dim>(s * d.template tail<SpatialDim<Dim>::kRot>())) *
+    p.rotation = rotation_exp<Scalar>(
+                     AngularVector<Scalar, Dim>(s * d.template tail<SpatialDim<Dim>::kRot>())) *
                  p0.rotation;
     return p;
   }
