@@ -172,12 +172,19 @@ inline PlanarController::Config box2d_controller_config() {
   c.pose_feedback.position_integral_limit = 2e-3 * s;
   c.pose_feedback.orientation_integral_limit = 2e-2;
   c.servo.motion = PiGains<double>{1.0, 0.0};
-  c.servo.force = PiGains<double>{0.02 * s, 0.2 * s};
+  c.servo.force =
+      PiGains<double>{0.02 * s, 0.2 * s};  // HybridServo's own; the controller uses force_layer
   c.ik.damping.singular_threshold = 5e-3 * s;
   c.ik.damping.max_damping = 5e-3 * s;
   c.force_planner.nominal_force = 1.0;
   c.force_planner.min_force = 0.2;
   c.force_planner.max_force = 6.0;
+  // The force layer's lengths in u (its stiffness bounds in N/u).
+  c.force_layer.min_stiffness /= s;
+  c.force_layer.max_stiffness /= s;
+  c.force_layer.min_excitation *= s;
+  c.force_layer.max_integral_velocity *= s;
+  c.force_layer.slip_distance *= s;
   c.grasp.approach_speed = 0.03 * s;
   c.grasp.creep_speed = 0.005 * s;
   c.grasp.position_tolerance = 1e-3 * s;

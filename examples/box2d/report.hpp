@@ -85,6 +85,7 @@ inline void fill_trace_row(const ScenarioSpec& spec, const TickRecord& rec,
   row.measured = rec.input->object_pose;
   row.actual = *rec.actual;
   examples::fill_trace_fingers<2>(*rec.input, *rec.output, row.fingers);
+  examples::fill_trace_hand<2>(*rec.output, row);
 }
 
 inline examples::RunSummary run_summary(const ScenarioSpec& spec, const ScenarioResult& r) {

@@ -49,6 +49,9 @@ struct TraceFinger {
   ServoCommand<double, Dim> servo{};
   FingerState state = FingerState::idle;
   IkStatus ik_status = IkStatus::ok;
+  double stiffness = 0.0;       ///< the force loop's stiffness estimate [N/m]
+  double force_integral = 0.0;  ///< the force loop's integrator [N s]
+  bool slipping = false;
 };
 
 /// One control tick.
@@ -59,6 +62,10 @@ struct TraceRow {
   std::string stage_name;
   Pose<double, Dim> desired{}, measured{}, actual{};
   std::vector<TraceFinger<Dim>> fingers;
+  double grip = 1.0;  ///< the force layer's grip scale
+  /// Load estimate (force; torque) and layer 1's pose-error integral (m s; rad s).
+  Twist<double, Dim> load = Twist<double, Dim>::Zero();
+  Twist<double, Dim> pose_integral = Twist<double, Dim>::Zero();
 };
 
 /// Fills `fingers` from a ReactiveController's input (the tactile data it used) and
@@ -78,7 +85,18 @@ void fill_trace_fingers(const Input& in, const Output& out,
     f.servo = o.servo;
     f.state = o.state;
     f.ik_status = o.ik.status;
+    f.stiffness = o.stiffness_estimate;
+    f.force_integral = o.force_integral;
+    f.slipping = o.slipping;
   }
+}
+
+/// The hand-level force-layer and layer-1 states of a row.
+template <int Dim, typename Output, typename Row>
+void fill_trace_hand(const Output& out, Row& row) {
+  row.grip = out.grip;
+  row.load = out.load_estimate;
+  row.pose_integral = out.pose_error_integral;
 }
 
 /// Letters, digits and '_' only (other characters become '_').
@@ -119,6 +137,17 @@ class TraceCsvWriter {
       for (const char* part : {"_motion_", "_force_", "_total_"})
         for (int k = 0; k < Dim; ++k) h += "," + n + part + axes[k];
       h += "," + n + "_state," + n + "_ik";
+      h += "," + n + "_k," + n + "_z," + n + "_slip";
+    }
+    h += ",grip";
+    const char* wrench3[] = {"fx", "fy", "fz", "tx", "ty", "tz"};
+    const char* wrench2[] = {"fx", "fy", "tz"};
+    for (const char* prefix : {"load_", "pint_"}) {
+      if constexpr (Dim == 3) {
+        for (const char* c : wrench3) h += std::string(",") + prefix + c;
+      } else {
+        for (const char* c : wrench2) h += std::string(",") + prefix + c;
+      }
     }
     h += "\n";
     file_.write(h);
@@ -145,7 +174,13 @@ class TraceCsvWriter {
       vec(f, t.servo.force);
       vec(f, t.servo.total);
       std::fprintf(f, ",%s,%s", to_string(t.state), to_string(t.ik_status));
+      num(f, t.stiffness);
+      num(f, t.force_integral);
+      std::fprintf(f, ",%d", t.slipping ? 1 : 0);
     }
+    num(f, row.grip);
+    vec(f, row.load);
+    vec(f, row.pose_integral);
     std::fputc('\n', f);
     ++rows_;
   }

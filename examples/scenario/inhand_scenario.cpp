@@ -242,6 +242,7 @@ int run_scenario(const Options& o) {
         row.measured = rec.input->object_pose;
         row.actual = *rec.actual;
         ex::fill_trace_fingers<3>(*rec.input, *rec.output, row.fingers);
+        ex::fill_trace_hand<3>(*rec.output, row);
         trace->write(row);
       };
     }

@@ -182,6 +182,30 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     f.finish();
   }
   {
+    ObjectReader f = r.object("force_layer");
+    ForceLayerParams<double>& fl = c.force_layer;
+    fl.bandwidth = f.number("bandwidth", fl.bandwidth, Range::positive_up_to(1e4));
+    fl.integral_corner =
+        f.number("integral_corner", fl.integral_corner, Range::non_negative_up_to(1e4));
+    fl.min_stiffness = f.number("min_stiffness", fl.min_stiffness, Range::positive_up_to(1e9));
+    fl.max_stiffness = f.number("max_stiffness", fl.max_stiffness, Range::positive_up_to(1e9));
+    fl.stiffness_window =
+        f.number("stiffness_window", fl.stiffness_window, Range::positive_up_to(100.0));
+    fl.min_excitation = f.number("min_excitation", fl.min_excitation, Range::positive_up_to(1.0));
+    fl.min_fit = f.number("min_fit", fl.min_fit, Range::positive_up_to(1.0));
+    fl.max_integral_velocity =
+        f.number("max_integral_velocity", fl.max_integral_velocity, Range::positive_up_to(10.0));
+    fl.slip_distance = f.number("slip_distance", fl.slip_distance, Range::positive_up_to(1.0));
+    fl.grip_rise_rate =
+        f.number("grip_rise_rate", fl.grip_rise_rate, Range::non_negative_up_to(1e4));
+    fl.friction_margin = f.number("friction_margin", fl.friction_margin, Range::closed(1.0, 100.0));
+    fl.grip_decay_time =
+        f.number("grip_decay_time", fl.grip_decay_time, Range::positive_up_to(1e6));
+    fl.rigid_tolerance =
+        f.number("rigid_tolerance", fl.rigid_tolerance, Range::positive_up_to(1.0));
+    f.finish();
+  }
+  {
     ObjectReader o = r.object("outlier_gates");
     OutlierGates<double>& og = c.outlier_gates;
     og.max_object_speed =

@@ -407,7 +407,10 @@ TEST(Fault, WithoutGatesTheOutliersAreNotReportedAndDisturbTheLoop) {
   const FaultRun s = run_fault(spike);
   ASSERT_EQ(s.r.faults.size(), 1u);
   EXPECT_EQ(s.r.faults[0].detection_ticks, -1);
-  EXPECT_GE(s.r.faults[0].max_force_integral, 5e-3);
+  // Ungated, the spike winds the force integrator up to well above the gated bound
+  // (1e-3 N s). Only the spike's internal half is integrated (force_layer.hpp: the
+  // other half has a resultant, which is the pose loop's), hence 2e-3, not 5e-3.
+  EXPECT_GE(s.r.faults[0].max_force_integral, 2e-3);
   record("ungated_force_spike_max_force_integral_Ns", s.r.faults[0].max_force_integral);
   record("ungated_force_spike_translate_x_max_position_error_u",
          stage(s.r, "translate_x").max_position_error);

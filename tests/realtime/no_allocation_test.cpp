@@ -2,7 +2,9 @@
 // point_jacobian, ContactIk::solve (with and without the null-space term),
 // ContactIk::pseudo_inverse and HybridServo::update, for fixed-size fingers (planar 2
 // and 3 DOF, spatial 3, 4 and 5 DOF) and the run-time bounded finger (Dynamic,
-// MaxDof = 5), float and double.
+// MaxDof = 5), float and double; and the whole ReactiveController::update() of the
+// Shadow-like hand on the analytic plant (grasp, release, hold under gravity, a
+// translation: every force-layer branch), with bounded and with run-time DOF storage.
 //
 // Two independent detectors guard the loop:
 //  - a counting replacement of every global operator new (plain, array, nothrow,
@@ -29,6 +31,7 @@
 #include "inhand/controller/ik.hpp"
 #include "inhand/controller/servo.hpp"
 #include "inhand/kinematics/finger_chain.hpp"
+#include "inhand/plant/scenario.hpp"
 
 #if defined(NDEBUG) || defined(EIGEN_NO_DEBUG)
 #error "the no-malloc guard needs assertions enabled in this translation unit"
@@ -207,6 +210,85 @@ TYPED_TEST(NoAllocationTest, PerTickPathDoesNotAllocate) {
 
 // Canary 1: the counter sees a plain new, an aligned new, a nothrow new and a
 // std::vector growing inside the region.
+/// Runs grasp -> release -> hold -> move on the analytic plant and returns the
+/// allocations counted inside controller.update() (the plant's calls are outside).
+template <typename Controller>
+long whole_tick_allocations(long& ticks) {
+  namespace ip = inhand::plant;
+  const ip::HandPreset hand = ip::shadow_like_hand();
+  ip::HandPlant plant(hand.fingers, ip::paper_cylinder(hand), ip::default_plant_params());
+  typename Controller::Config cfg;
+  for (std::size_t i = 0; i < hand.fingers.size(); ++i) {
+    typename Controller::FingerConfig f;
+    const inhand::plant::PlantFinger& src = hand.fingers[i];
+    f.chain.base = src.base;
+    f.chain.joint_to_tip = src.joint_to_tip;
+    f.chain.fingertip_radius = src.fingertip_radius;
+    EXPECT_TRUE(f.chain.joints.resize(src.dof()));
+    for (int j = 0; j < src.dof(); ++j) f.chain.joints[j] = src.joints[j];
+    f.role = static_cast<int>(i) == hand.thumb ? inhand::FingerRole::balancing : inhand::FingerRole::preset;
+    cfg.fingers.push_back(f);
+  }
+  Controller c;
+  EXPECT_TRUE(c.configure(cfg).ok());
+  for (int i = 0; i < plant.finger_count(); ++i)
+    plant.set_joint_positions(i, hand.open_configuration[static_cast<std::size_t>(i)]);
+  typename Controller::Input in = c.make_input();
+  typename Controller::Output out = c.make_output();
+  plant.set_frozen(true);
+  EXPECT_TRUE(c.start_grasp(ip::model_free_grasp_targets(hand, plant.object_pose())).ok());
+  long allocations = 0;
+  double t = 0.0;
+  auto tick = [&]() {
+    plant.sample_sensors();
+    t += 1e-3;
+    in.time = t;
+    in.object_pose = plant.measured_object_pose();
+    for (int i = 0; i < plant.finger_count(); ++i) {
+      auto& f = in.fingers[static_cast<std::size_t>(i)];
+      f.joint_positions = plant.joint_positions(i);
+      const ip::TactileReading r = plant.tactile(i);
+      f.contact.touching = r.touching;
+      if (r.touching) {
+        f.contact.contact_point = r.contact_point;
+        f.contact.normal = r.normal;
+        f.contact.normal_force = r.normal_force;
+      }
+    }
+    inhand::ControllerStatus st;
+    {
+      NoAllocationRegion region;
+      st = c.update(in, out);
+      allocations += region.allocations();
+    }
+    for (int i = 0; i < plant.finger_count(); ++i)
+      plant.set_joint_velocity_command(i, out.fingers[static_cast<std::size_t>(i)].joint_velocities);
+    plant.step(1e-3);
+    ++ticks;
+    return st;
+  };
+  for (int k = 0; k < 3000 && tick() != inhand::ControllerStatus::grasped; ++k) {
+  }
+  EXPECT_EQ(c.phase(), Controller::Phase::grasped);
+  plant.set_frozen(false);
+  typename Controller::Trajectory traj;
+  traj.reset(plant.object_pose());
+  traj.append(inhand::TrajectorySegment<double, 3>::hold_for(0.5));
+  EXPECT_TRUE(c.start_manipulation(traj).ok());
+  for (int k = 0; k < 800; ++k) EXPECT_EQ(tick(), inhand::ControllerStatus::ok);
+  return allocations;
+}
+
+TEST(NoAllocationWholeTick, BoundedAndRunTimeDofShadowLikeHand) {
+  long ticks = 0;
+  EXPECT_EQ(whole_tick_allocations<inhand::plant::HandController>(ticks), 0);
+  EXPECT_GT(ticks, 1000);
+  using DynamicDof = inhand::ReactiveController<double, 3, inhand::Dynamic, inhand::Dynamic>;
+  ticks = 0;
+  EXPECT_EQ(whole_tick_allocations<DynamicDof>(ticks), 0);
+  EXPECT_GT(ticks, 1000);
+}
+
 TEST(NoAllocationCanary, CounterCatchesCppAllocations) {
   struct alignas(64) Wide {
     double v[8];

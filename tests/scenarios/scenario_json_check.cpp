@@ -995,7 +995,9 @@ TEST(TraceCsv, SpatialRowsMatchTheHeader) {
   std::getline(in, header);
   std::getline(in, line);
   const std::vector<std::string> h = split(header), r = split(line);
-  ASSERT_EQ(h.size(), 3u + 18u + 2u * 17u);
+  // time, stage, name; 3 poses; per finger 17 + stiffness, integral, slip; grip, load, pose
+  // integral
+  ASSERT_EQ(h.size(), 3u + 18u + 2u * 20u + 1u + 6u + 6u);
   ASSERT_EQ(r.size(), h.size());
   auto col = [&](const std::string& name) {
     for (std::size_t i = 0; i < h.size(); ++i)
@@ -1052,7 +1054,7 @@ TEST(TraceCsv, PlanarRowsMatchTheHeader) {
   std::getline(in, header);
   std::getline(in, line);
   const std::vector<std::string> h = split(header), r = split(line);
-  ASSERT_EQ(h.size(), 3u + 9u + 2u * 13u);
+  ASSERT_EQ(h.size(), 3u + 9u + 2u * 16u + 1u + 3u + 3u);
   ASSERT_EQ(r.size(), h.size());
   EXPECT_EQ(h[3], "des_x");
   EXPECT_EQ(h[5], "des_angle");

@@ -36,6 +36,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "inhand/controller/force_layer.hpp"
 #include "inhand/controller/force_planner.hpp"
 #include "inhand/controller/grasp.hpp"
 #include "inhand/controller/ik.hpp"
@@ -58,13 +59,20 @@ enum class ControllerStatus : unsigned char {
 };
 inline const char* to_string(ControllerStatus s) noexcept {
   switch (s) {
-    case ControllerStatus::ok: return "ok";
-    case ControllerStatus::grasping: return "grasping";
-    case ControllerStatus::grasped: return "grasped";
-    case ControllerStatus::contact_lost: return "contact_lost";
-    case ControllerStatus::idle: return "idle";
-    case ControllerStatus::not_configured: return "not_configured";
-    case ControllerStatus::invalid_input: return "invalid_input";
+    case ControllerStatus::ok:
+      return "ok";
+    case ControllerStatus::grasping:
+      return "grasping";
+    case ControllerStatus::grasped:
+      return "grasped";
+    case ControllerStatus::contact_lost:
+      return "contact_lost";
+    case ControllerStatus::idle:
+      return "idle";
+    case ControllerStatus::not_configured:
+      return "not_configured";
+    case ControllerStatus::invalid_input:
+      return "invalid_input";
   }
   return "unknown";
 }
@@ -83,15 +91,24 @@ enum class InputField : unsigned char {
 };
 inline const char* to_string(InputField f) noexcept {
   switch (f) {
-    case InputField::none: return "none";
-    case InputField::time: return "time";
-    case InputField::object_pose: return "object_pose";
-    case InputField::joint_positions: return "joint_positions";
-    case InputField::contact_point: return "contact_point";
-    case InputField::contact_normal: return "contact_normal";
-    case InputField::normal_force: return "normal_force";
-    case InputField::jacobian: return "jacobian";
-    case InputField::virtual_contact_point: return "virtual_contact_point";
+    case InputField::none:
+      return "none";
+    case InputField::time:
+      return "time";
+    case InputField::object_pose:
+      return "object_pose";
+    case InputField::joint_positions:
+      return "joint_positions";
+    case InputField::contact_point:
+      return "contact_point";
+    case InputField::contact_normal:
+      return "contact_normal";
+    case InputField::normal_force:
+      return "normal_force";
+    case InputField::jacobian:
+      return "jacobian";
+    case InputField::virtual_contact_point:
+      return "virtual_contact_point";
   }
   return "unknown";
 }
@@ -104,16 +121,20 @@ struct InputFault {
 /// Warnings raised during a valid tick (bit flags, never silent saturation).
 enum class ControllerWarning : unsigned {
   none = 0,
-  ik_damped = 1u << 0,        ///< some finger's IK was damped near a singularity
+  ik_damped = 1u << 0,               ///< some finger's IK was damped near a singularity
   joint_velocity_limited = 1u << 1,  ///< some finger's joint velocities were scaled down
-  servo_saturated = 1u << 2,  ///< some servo PI hit its integral/output limit
-  force_limited = 1u << 3,    ///< the planner limited a balancing force
-  twist_limited = 1u << 4,    ///< the commanded object twist was scaled to its limit
-  long_tick = 1u << 5,        ///< dt exceeded max_tick: integration used max_tick
-  no_balancing_contact = 1u << 6,  ///< no balancing finger touching: forces unbalanced
-  rate_limited = 1u << 7,     ///< some finger's command change was scaled to max_joint_acceleration
-  pose_outlier = 1u << 8,     ///< the measured object pose jumped implausibly: previous one held
-  force_outlier = 1u << 9,    ///< a measured normal force jumped implausibly: previous one held
+  servo_saturated = 1u << 2,         ///< some servo PI hit its integral/output limit
+  force_limited = 1u << 3,           ///< the planner limited a balancing force
+  twist_limited = 1u << 4,           ///< the commanded object twist was scaled to its limit
+  long_tick = 1u << 5,               ///< dt exceeded max_tick: integration used max_tick
+  no_balancing_contact = 1u << 6,    ///< no balancing finger touching: forces unbalanced
+  rate_limited = 1u << 7,   ///< some finger's command change was scaled to max_joint_acceleration
+  pose_outlier = 1u << 8,   ///< the measured object pose jumped implausibly: previous one held
+  force_outlier = 1u << 9,  ///< a measured normal force jumped implausibly: previous one held
+  slipping = 1u << 10,      ///< some contact slides along the object (force layer)
+  grip_raised = 1u << 11,   ///< the grip is above the nominal pattern (force layer)
+  beyond_capacity = 1u << 12,  ///< the load needs more than max_force: the object may be lost
+  force_integral_limited = 1u << 13,  ///< some force integrator reached its bound
 };
 constexpr ControllerWarning operator|(ControllerWarning a, ControllerWarning b) noexcept {
   return static_cast<ControllerWarning>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
@@ -124,10 +145,10 @@ constexpr bool has(ControllerWarning s, ControllerWarning flag) noexcept {
 
 template <typename Scalar>
 struct PoseFeedback {
-  Scalar position_gain = Scalar(8);     ///< 1/s
-  Scalar orientation_gain = Scalar(8);  ///< 1/s
-  Scalar max_linear_speed = Scalar(0.05);   ///< m/s, bound on the commanded linear velocity
-  Scalar max_angular_speed = Scalar(1.0);   ///< rad/s
+  Scalar position_gain = Scalar(8);        ///< 1/s
+  Scalar orientation_gain = Scalar(8);     ///< 1/s
+  Scalar max_linear_speed = Scalar(0.05);  ///< m/s, bound on the commanded linear velocity
+  Scalar max_angular_speed = Scalar(1.0);  ///< rad/s
   /// Integral action on the pose error (1/s^2): removes the steady offset left where
   /// the force servos' integrators balance the proportional pose feedback.
   Scalar position_integral_gain = Scalar(10);
@@ -139,7 +160,8 @@ struct PoseFeedback {
     if (!is_finite(position_integral_gain) || position_integral_gain < Scalar(0))
       return Validation::invalid("pose_feedback.position_integral_gain", "must be finite and >= 0");
     if (!is_finite(orientation_integral_gain) || orientation_integral_gain < Scalar(0))
-      return Validation::invalid("pose_feedback.orientation_integral_gain", "must be finite and >= 0");
+      return Validation::invalid("pose_feedback.orientation_integral_gain",
+                                 "must be finite and >= 0");
     if (!(position_integral_limit > Scalar(0)))
       return Validation::invalid("pose_feedback.position_integral_limit", "must be > 0");
     if (!(orientation_integral_limit > Scalar(0)))
@@ -172,8 +194,10 @@ struct OutlierGates {
   Validation validate() const noexcept {
     if (!(max_object_speed > Scalar(0)) || max_object_speed != max_object_speed)
       return Validation::invalid("outlier_gates.max_object_speed", "must be > 0 (+inf disables)");
-    if (!(max_object_angular_speed > Scalar(0)) || max_object_angular_speed != max_object_angular_speed)
-      return Validation::invalid("outlier_gates.max_object_angular_speed", "must be > 0 (+inf disables)");
+    if (!(max_object_angular_speed > Scalar(0)) ||
+        max_object_angular_speed != max_object_angular_speed)
+      return Validation::invalid("outlier_gates.max_object_angular_speed",
+                                 "must be > 0 (+inf disables)");
     if (!(max_force_rate > Scalar(0)) || max_force_rate != max_force_rate)
       return Validation::invalid("outlier_gates.max_force_rate", "must be > 0 (+inf disables)");
     if (max_consecutive_rejections < 0)
@@ -184,7 +208,8 @@ struct OutlierGates {
 
 namespace detail {
 template <typename T, int N>
-using FingerArray = std::conditional_t<N == Dynamic, std::vector<T>, std::array<T, (N > 0 ? N : 1)>>;
+using FingerArray =
+    std::conditional_t<N == Dynamic, std::vector<T>, std::array<T, (N > 0 ? N : 1)>>;
 }  // namespace detail
 
 /// Controller for NumFingers fingers of Dim-dimensional space; finger DOF as in
@@ -204,6 +229,8 @@ class ReactiveController {
   using PoseT = Pose<Scalar, Dim>;
   using Trajectory = ObjectTrajectory<Scalar, Dim>;
   using Planner = ForcePlanner<Scalar, Dim, NumFingers>;
+  using Forces = ForceLayer<Scalar, Dim, NumFingers>;
+  using Wrench = typename Forces::Wrench;
 
   /// Where a finger's contact Jacobian comes from.
   enum class KinematicsSource : unsigned char {
@@ -235,6 +262,9 @@ class ReactiveController {
     ServoGains<Scalar> servo{};
     IkParams<Scalar> ik{};
     ForcePlannerParams<Scalar> force_planner{};
+    /// The normal-force loops, the grip and slip detection (force_layer.hpp). The
+    /// force part of `servo` is not used by the controller: these loops replace it.
+    ForceLayerParams<Scalar> force_layer{};
     GraspParams<Scalar> grasp{};
     OutlierGates<Scalar> outlier_gates{};
   };
@@ -270,10 +300,17 @@ class ReactiveController {
     JointVector joint_velocities{};  ///< rad/s, the command
     FingerState state = FingerState::idle;
     Vec desired_contact_velocity = Vec::Zero();  ///< eq. 2 (or the approach velocity)
-    Scalar desired_normal_force = Scalar(0);     ///< N (0 when no force is servoed)
-    ServoCommand<Scalar, Dim> servo{};           ///< motion / force parts and their sum
+    /// N, the planned force: the grip times the planner's pattern (0 when no force is
+    /// servoed). The measured force settles at force_target instead, which differs by
+    /// the share of the load this finger carries (force_layer.hpp).
+    Scalar desired_normal_force = Scalar(0);
+    Scalar force_target = Scalar(0);    ///< N, what the force loop drives the measured force to
+    ServoCommand<Scalar, Dim> servo{};  ///< motion / force parts and their sum
     ServoStatus servo_status = ServoStatus::ok;
     IkReport<Scalar> ik{};
+    Scalar stiffness_estimate = Scalar(0);  ///< N/m, the force loop's estimate (force_layer.hpp)
+    Scalar force_integral = Scalar(0);      ///< N s, the force loop's integrator (internal part)
+    bool slipping = false;                  ///< the contact slides along the object
   };
 
   struct Output {
@@ -282,8 +319,15 @@ class ReactiveController {
     TwistT feedforward_twist = TwistT::Zero();
     TwistT commanded_twist = TwistT::Zero();  ///< feed-forward + feedback, after limits
     TwistT pose_error = TwistT::Zero();       ///< pose_error(desired, measured)
-    Vec force_residual = Vec::Zero();          ///< sum f_i n_i of the plan, N
+    Vec force_residual = Vec::Zero();         ///< sum f_i n_i of the plan, N
     ForcePlanStatus force_plan_status = ForcePlanStatus::ok;
+    /// External wrench (force N; torque N m about the measured object position, world
+    /// frame) that the measured normal forces balance: the load estimate (weight, a
+    /// push, a sensor bias) along the directions the normals span. Zero while grasping.
+    Wrench load_estimate = Wrench::Zero();
+    Scalar grip = Scalar(1);  ///< grip scale s >= 1 of the force layer
+    ForceLayerStatus force_layer_status = ForceLayerStatus::ok;
+    TwistT pose_error_integral = TwistT::Zero();  ///< layer 1's integrator (m s; rad s)
     ControllerWarning warnings = ControllerWarning::none;
     InputFault fault{};
     Scalar manipulation_time = Scalar(0);  ///< s since start_manipulation
@@ -303,13 +347,15 @@ class ReactiveController {
       return Validation::invalid("control_period", "must be finite and > 0");
     if (!is_finite(c.max_tick) || !(c.max_tick >= c.control_period))
       return Validation::invalid("max_tick", "must be finite and >= control_period");
-    if (!(c.max_joint_acceleration > Scalar(0)) || c.max_joint_acceleration != c.max_joint_acceleration)
+    if (!(c.max_joint_acceleration > Scalar(0)) ||
+        c.max_joint_acceleration != c.max_joint_acceleration)
       return Validation::invalid("max_joint_acceleration", "must be > 0 (+inf disables)");
     Validation v = c.pose_feedback.validate();
     if (!v.ok()) return v;
     if (!(v = c.servo.validate()).ok()) return v;
     if (!(v = c.ik.validate()).ok()) return Validation::invalid("ik.damping", v.reason);
     if (!(v = c.force_planner.validate()).ok()) return v;
+    if (!(v = c.force_layer.validate()).ok()) return v;
     if (!(v = c.grasp.validate()).ok()) return v;
     if (!(v = c.outlier_gates.validate()).ok()) return v;
     bool any_balancing = false;
@@ -333,6 +379,11 @@ class ReactiveController {
     if constexpr (NumFingers == Dynamic) slots_.resize(static_cast<std::size_t>(n));
     planner_.resize(n);
     planner_.set_params(c.force_planner);
+    forces_.set_params(c.force_layer);
+    forces_.resize(n);
+    force_result_.velocity.setZero(n);
+    force_result_.target.setZero(n);
+    force_result_.slipping.setZero(n);
     for (int i = 0; i < n; ++i) {
       const FingerConfig& fc = config_.fingers[static_cast<std::size_t>(i)];
       Slot& s = slots_[static_cast<std::size_t>(i)];
@@ -344,12 +395,16 @@ class ReactiveController {
       s.servo.set_gains(c.servo);
       s.jacobian.setZero(Dim, dof);
       s.qdot.setZero(dof);
+      s.q_prev.setZero(dof);
       s.max_velocity = fc.chain.velocity_limits();
       planner_.set_role(i, fc.role);
     }
     touching_ = Planner::Mask::Zero(n);
     normals_ = Planner::Normals::Zero(Dim, n);
     desired_forces_ = Planner::ForceVector::Zero(n);
+    contact_points_ = Planner::Normals::Zero(Dim, n);
+    measured_forces_ = Planner::ForceVector::Zero(n);
+    advance_ = Planner::ForceVector::Zero(n);
     configured_ = true;
     reset();
     return Validation::valid();
@@ -365,11 +420,14 @@ class ReactiveController {
     pose_rejections_ = 0;
     pose_age_ = Scalar(0);
     planner_.reset();
+    forces_.reset();
     for (Slot& s : slots_) {
       s.servo.reset();
       s.state = FingerState::idle;
       s.had_contact = false;
       s.qdot.setZero();
+      s.has_q_prev = false;
+      s.last_motion.setZero();
       s.force_valid = false;
       s.force_rejections = 0;
     }
@@ -402,7 +460,8 @@ class ReactiveController {
   bool configured() const noexcept { return configured_; }
 
   /// Starts the grasp phase towards one target per finger (see grasp.hpp).
-  Validation start_grasp(const detail::FingerArray<GraspTarget<Scalar, Dim>, NumFingers>& targets) noexcept {
+  Validation start_grasp(
+      const detail::FingerArray<GraspTarget<Scalar, Dim>, NumFingers>& targets) noexcept {
     if (!configured_) return Validation::invalid("controller", "not configured");
     if (static_cast<int>(targets.size()) != finger_count())
       return Validation::invalid("targets", "one target per finger");
@@ -480,21 +539,23 @@ class ReactiveController {
   /// imposed here; the servo PIs low-pass the command (paper, section IV-B).
   const Trajectory& trajectory() const noexcept { return trajectory_; }
 
-  /// Largest |integral| of any finger's force PI (N s): for monitoring windup.
+  /// Largest |integral| of any finger's force loop (N s): for monitoring windup.
   Scalar max_force_integral() const noexcept {
     Scalar m = Scalar(0);
-    for (const Slot& s : slots_) m = std::max(m, std::abs(s.servo.force_pi().integral()(0)));
+    for (int i = 0; i < forces_.size(); ++i) m = std::max(m, std::abs(forces_.integral()(i)));
     return m;
   }
 
  private:
-
   struct Slot {
     FingerKinematics<Chain> kinematics{};
     ContactIk<Scalar, Dim, Dof_, MaxDof_> ik{};
     HybridServo<Scalar, Dim> servo{};
     Jacobian jacobian{};
     JointVector qdot{};
+    JointVector q_prev{};  ///< joint positions of the last tick (force layer's advance)
+    bool has_q_prev = false;
+    Vec last_motion = Vec::Zero();  ///< last tick's motion part of the command
     JointVector max_velocity{};
     GraspTarget<Scalar, Dim> target{};
     FingerState state = FingerState::idle;
@@ -512,7 +573,8 @@ class ReactiveController {
   };
 
   InputFault check_input(const Input& in) const noexcept {
-    if (!is_finite(in.time) || (has_time_ && !(in.time > last_time_))) return {InputField::time, -1};
+    if (!is_finite(in.time) || (has_time_ && !(in.time > last_time_)))
+      return {InputField::time, -1};
     if (!in.object_pose.is_finite()) return {InputField::object_pose, -1};
     const Rotation<Scalar, Dim> RtR = in.object_pose.rotation.transpose() * in.object_pose.rotation;
     if (!((RtR - Rotation<Scalar, Dim>::Identity()).cwiseAbs().maxCoeff() < Scalar(1e-3)))
@@ -531,7 +593,8 @@ class ReactiveController {
           return {InputField::normal_force, i};
       }
       if (fc.kinematics == KinematicsSource::external) {
-        if (f.jacobian.cols() != fc.chain.dof() || !all_finite(f.jacobian)) return {InputField::jacobian, i};
+        if (f.jacobian.cols() != fc.chain.dof() || !all_finite(f.jacobian))
+          return {InputField::jacobian, i};
         if (!f.contact.touching && !all_finite(f.virtual_contact_point))
           return {InputField::virtual_contact_point, i};
       }
@@ -563,10 +626,12 @@ class ReactiveController {
     bool accept = !has_time_;
     if (!accept) {
       const Scalar dp = (in.object_pose.position - object_pose_.position).norm();
-      const Scalar dr = rotation_log<Scalar>(Rotation<Scalar, Dim>(in.object_pose.rotation *
-                                                                   object_pose_.rotation.transpose()))
-                            .norm();
-      accept = dp <= g.max_object_speed * elapsed_pose && dr <= g.max_object_angular_speed * elapsed_pose;
+      const Scalar dr =
+          rotation_log<Scalar>(
+              Rotation<Scalar, Dim>(in.object_pose.rotation * object_pose_.rotation.transpose()))
+              .norm();
+      accept = dp <= g.max_object_speed * elapsed_pose &&
+               dr <= g.max_object_angular_speed * elapsed_pose;
       if (!accept && pose_rejections_ >= g.max_consecutive_rejections) accept = true;
     }
     if (accept) {
@@ -586,7 +651,8 @@ class ReactiveController {
         continue;
       }
       const Scalar elapsed = sl.force_age + raw_dt;
-      bool ok = !sl.force_valid || std::abs(c.normal_force - sl.force_used) <= g.max_force_rate * elapsed ||
+      bool ok = !sl.force_valid ||
+                std::abs(c.normal_force - sl.force_used) <= g.max_force_rate * elapsed ||
                 sl.force_rejections >= g.max_consecutive_rejections;
       if (ok) {
         sl.force_used = c.normal_force;
@@ -626,14 +692,65 @@ class ReactiveController {
     return fingertip_surface_point(fc.chain, slots_[static_cast<std::size_t>(i)].kinematics, n);
   }
 
-  /// Servo + IK for one finger; fills its output.
-  void servo_and_ik(int i, const Vec& v_desired, Scalar f_desired, const FingerInput& f,
-                    bool force_active, Scalar dt, FingerOutput& fo, ControllerWarning& w) noexcept {
+  /// Copies the touching fingers' contacts (unit normals) and gated forces into the
+  /// force layer's input and runs it; `object_free` false during the grasp.
+  void run_force_layer(const Input& in, bool object_free, Scalar dt) noexcept {
+    for (int i = 0; i < finger_count(); ++i) {
+      const TactileContact& c = in.fingers[static_cast<std::size_t>(i)].contact;
+      Slot& s = slots_[static_cast<std::size_t>(i)];
+      const JointVector& q = in.fingers[static_cast<std::size_t>(i)].joint_positions;
+      touching_(i) = c.touching ? 1 : 0;
+      advance_(i) = Scalar(0);
+      if (c.touching) {
+        normals_.col(i) = c.normal.normalized();
+        contact_points_.col(i) = c.contact_point;
+        measured_forces_(i) = s.force_used;
+        // Fingertip displacement since the last tick (last tick's Jacobian) less the
+        // displacement the last command gave the object there, along -n.
+        if (s.has_q_prev) {
+          s.q_prev = q - s.q_prev;  // the joint step (preallocated: no temporary)
+          Vec dp;
+          dp.noalias() = s.jacobian * s.q_prev;
+          advance_(i) = -normals_.col(i).dot(dp - dt * s.last_motion);
+        }
+      }
+      s.q_prev = q;
+      s.has_q_prev = true;
+    }
+    typename Forces::Step step;
+    step.touching = &touching_;
+    step.points = &contact_points_;
+    step.normals = &normals_;
+    step.measured = &measured_forces_;
+    step.pattern = &desired_forces_;
+    step.advance = &advance_;
+    step.object_position = object_pose_.position;
+    step.object_rotation = object_pose_.rotation;
+    step.min_force = config_.force_planner.min_force;
+    step.max_force = config_.force_planner.max_force;
+    step.object_free = object_free;
+    step.dt = dt;
+    forces_.update(step, force_result_);
+  }
+
+  /// Servo + IK for one finger; fills its output. `force_active`: the finger touches
+  /// and the force layer's velocity u (into the object along -n) is added (eq. 7).
+  void servo_and_ik(int i, const Vec& v_desired, bool force_active, const FingerInput& f, Scalar dt,
+                    FingerOutput& fo, ControllerWarning& w) noexcept {
     Slot& s = slots_[static_cast<std::size_t>(i)];
     fo.desired_contact_velocity = v_desired;
-    fo.desired_normal_force = force_active ? f_desired : Scalar(0);
-    fo.servo_status = s.servo.update(v_desired, f_desired, s.force_used, f.contact.normal,
-                                     force_active, dt, fo.servo);
+    fo.desired_normal_force = force_active ? force_result_.grip * desired_forces_(i) : Scalar(0);
+    fo.force_target = force_active ? force_result_.target(i) : Scalar(0);
+    fo.servo_status =
+        s.servo.update(v_desired, Scalar(0), Scalar(0), f.contact.normal, false, dt, fo.servo);
+    if (force_active) {
+      fo.servo.force = -force_result_.velocity(i) * normals_.col(i);
+      fo.servo.total = fo.servo.motion + fo.servo.force;
+    }
+    s.last_motion = fo.servo.motion;
+    fo.stiffness_estimate = forces_.stiffness_estimate()(i);
+    fo.force_integral = forces_.integral()(i);
+    fo.slipping = force_result_.slipping(i) != 0;
     if (fo.servo_status != ServoStatus::ok) w = w | ControllerWarning::servo_saturated;
     fo.ik = s.ik.solve(s.jacobian, fo.servo.total, s.max_velocity, fo.joint_velocities);
     if (has(fo.ik.status, IkStatus::damped)) w = w | ControllerWarning::ik_damped;
@@ -646,7 +763,8 @@ class ReactiveController {
         fo.joint_velocities = s.qdot + (max_step / largest) * (fo.joint_velocities - s.qdot);
         // A convex combination of two commands within the joint limits: only rounding
         // can leave them; clamp it away (this only shrinks the step).
-        fo.joint_velocities = fo.joint_velocities.cwiseMin(s.max_velocity).cwiseMax(-s.max_velocity);
+        fo.joint_velocities =
+            fo.joint_velocities.cwiseMin(s.max_velocity).cwiseMax(-s.max_velocity);
         w = w | ControllerWarning::rate_limited;
       }
     }
@@ -674,6 +792,8 @@ class ReactiveController {
     ControllerWarning w = out.warnings;
     const GraspParams<Scalar>& g = config_.grasp;
     const Scalar f0 = config_.force_planner.nominal_force;
+    desired_forces_.setConstant(f0);
+    run_force_layer(in, false, dt);
     bool all_pressing = true;
     for (int i = 0; i < finger_count(); ++i) {
       Slot& s = slots_[static_cast<std::size_t>(i)];
@@ -687,13 +807,14 @@ class ReactiveController {
         const Vec d = s.target.contact_point - f.contact.contact_point;
         const Vec d_tangential = d - d.dot(f.contact.normal) * f.contact.normal;
         const Scalar cos_angle = f.contact.normal.dot(s.target.normal);
-        const Vec misalignment = s.target.normal - cos_angle * f.contact.normal;  // |.| = sin(angle)
+        const Vec misalignment =
+            s.target.normal - cos_angle * f.contact.normal;  // |.| = sin(angle)
         const Vec v = g.tangential_gain * d_tangential + g.alignment_speed * misalignment;
         // Grasp phase: the object is held fixed, so the contact LOCATION follows the
         // fingertip sphere centre, not the material point at the contact; servo the
         // centre so that the tangential pull really moves the contact (grasp.hpp).
         finger_jacobian(i, f, fingertip_centre(i, f));
-        servo_and_ik(i, v, f0, f, true, dt, fo, w);
+        servo_and_ik(i, v, true, f, dt, fo, w);
         // The contact has settled when it reached its target (position and normal), or
         // when it stalled: over the last settle window the normal turned by less than a
         // quarter of alignment_tolerance and the contact point moved by less than a
@@ -705,9 +826,10 @@ class ReactiveController {
         }
         s.align_window_time += dt;
         if (s.align_window_time >= std::max(g.settle_time, dt)) {
-          s.align_stalled =
-              (f.contact.normal - s.align_window_normal).norm() < Scalar(0.25) * std::sin(g.alignment_tolerance) &&
-              (f.contact.contact_point - s.align_window_point).norm() < Scalar(0.25) * g.position_tolerance;
+          s.align_stalled = (f.contact.normal - s.align_window_normal).norm() <
+                                Scalar(0.25) * std::sin(g.alignment_tolerance) &&
+                            (f.contact.contact_point - s.align_window_point).norm() <
+                                Scalar(0.25) * g.position_tolerance;
           s.align_window_time = Scalar(0);
         }
         const bool reached = cos_angle > Scalar(0) &&
@@ -721,7 +843,7 @@ class ReactiveController {
         const Vec p_v = virtual_point(i, f, s.target.normal);
         const Vec v = approach_velocity(g, p_v, s.target.contact_point, s.target.normal);
         finger_jacobian(i, f, p_v);
-        servo_and_ik(i, v, Scalar(0), f, false, dt, fo, w);
+        servo_and_ik(i, v, false, f, dt, fo, w);
         all_pressing = false;
       }
     }
@@ -763,7 +885,8 @@ class ReactiveController {
                             pf.orientation_integral_gain * pose_error_integral_.template tail<R>();
     const Scalar lin = V.template head<Dim>().norm(), ang = V.template tail<R>().norm();
     Scalar scale = Scalar(1);
-    if (lin > config_.pose_feedback.max_linear_speed) scale = config_.pose_feedback.max_linear_speed / lin;
+    if (lin > config_.pose_feedback.max_linear_speed)
+      scale = config_.pose_feedback.max_linear_speed / lin;
     if (ang > config_.pose_feedback.max_angular_speed)
       scale = std::min(scale, config_.pose_feedback.max_angular_speed / ang);
     if (scale < Scalar(1)) {
@@ -772,16 +895,30 @@ class ReactiveController {
     }
     out.commanded_twist = V;
 
-    // Layer 2: forces for the touching fingers.
+    // Layer 2: the planner's force pattern, then the force layer (force_layer.hpp).
     for (int i = 0; i < finger_count(); ++i) {
       const FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
       touching_(i) = f.contact.touching ? 1 : 0;
-      if (f.contact.touching) normals_.col(i) = f.contact.normal;
+      if (f.contact.touching) normals_.col(i) = f.contact.normal.normalized();
     }
-    out.force_plan_status = planner_.plan(touching_, normals_, dt, desired_forces_, out.force_residual);
-    if (has(out.force_plan_status, ForcePlanStatus::limited)) w = w | ControllerWarning::force_limited;
+    out.force_plan_status =
+        planner_.plan(touching_, normals_, dt, desired_forces_, out.force_residual);
+    if (has(out.force_plan_status, ForcePlanStatus::limited))
+      w = w | ControllerWarning::force_limited;
     if (has(out.force_plan_status, ForcePlanStatus::no_balancing_contact))
       w = w | ControllerWarning::no_balancing_contact;
+    run_force_layer(in, true, dt);
+    out.load_estimate = force_result_.load;
+    out.grip = force_result_.grip;
+    out.force_layer_status = force_result_.status;
+    out.pose_error_integral = pose_error_integral_;
+    if (has(force_result_.status, ForceLayerStatus::slipping)) w = w | ControllerWarning::slipping;
+    if (has(force_result_.status, ForceLayerStatus::grip_raised))
+      w = w | ControllerWarning::grip_raised;
+    if (has(force_result_.status, ForceLayerStatus::beyond_capacity))
+      w = w | ControllerWarning::beyond_capacity;
+    if (has(force_result_.status, ForceLayerStatus::integral_limited))
+      w = w | ControllerWarning::force_integral_limited;
 
     // Layers 2-3 per finger.
     bool lost = false;
@@ -793,9 +930,10 @@ class ReactiveController {
         if (s.state == FingerState::reacquiring) s.servo.reset_force();
         s.state = FingerState::in_contact;
         remember_contact(s, f.contact, object_pose_);
-        const Vec v = contact_point_velocity<Scalar, Dim>(V, f.contact.contact_point, object_pose_.position);
+        const Vec v =
+            contact_point_velocity<Scalar, Dim>(V, f.contact.contact_point, object_pose_.position);
         finger_jacobian(i, f, f.contact.contact_point);
-        servo_and_ik(i, v, desired_forces_(i), f, true, dt, fo, w);
+        servo_and_ik(i, v, true, f, dt, fo, w);
       } else {
         lost = true;
         if (s.state != FingerState::reacquiring) s.servo.reset_force();
@@ -808,7 +946,7 @@ class ReactiveController {
         const Vec v = approach_velocity(config_.grasp, p_v, p_t, n) +
                       contact_point_velocity<Scalar, Dim>(V, p_t, object_pose_.position);
         finger_jacobian(i, f, p_v);
-        servo_and_ik(i, v, Scalar(0), f, false, dt, fo, w);
+        servo_and_ik(i, v, false, f, dt, fo, w);
       }
     }
     out.warnings = w;
@@ -822,7 +960,12 @@ class ReactiveController {
   Planner planner_{};
   typename Planner::Mask touching_{};
   typename Planner::Normals normals_{};
-  typename Planner::ForceVector desired_forces_{};
+  typename Planner::ForceVector desired_forces_{};  ///< the planner's pattern q
+  typename Planner::Normals contact_points_{};
+  typename Planner::ForceVector measured_forces_{};
+  typename Planner::ForceVector advance_{};
+  Forces forces_{};
+  typename Forces::Result force_result_{};
   Trajectory trajectory_{};
   Scalar last_time_ = Scalar(0);
   bool has_time_ = false;
