@@ -5,6 +5,11 @@
 // only in commit(). Destroying an AtomicFile that was not committed removes the
 // temporary file, so a run that fails or throws half way leaves no partial output and
 // any previous version of the target untouched. POSIX only (mkstemp, rename).
+//
+// The target must be a regular file or a path that does not exist yet: the rename
+// replaces whatever the path names, so a FIFO, a device, a directory or a symbolic link
+// there is refused (OutputTargetError, checked when the AtomicFile is created and again
+// just before the rename) instead of being replaced by a regular file.
 #pragma once
 
 #include <sys/stat.h>
@@ -21,11 +26,48 @@
 
 namespace inhand::examples {
 
+/// The path given for an output names something that is not a regular file.
+class OutputTargetError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// What lstat(2) says `path` is, for messages ("directory", "FIFO", ...).
+inline std::string file_type_name(const struct stat& st) {
+  if (S_ISREG(st.st_mode)) return "regular file";
+  if (S_ISDIR(st.st_mode)) return "directory";
+  if (S_ISLNK(st.st_mode)) return "symbolic link";
+  if (S_ISFIFO(st.st_mode)) return "FIFO";
+  if (S_ISCHR(st.st_mode)) return "character device";
+  if (S_ISBLK(st.st_mode)) return "block device";
+  if (S_ISSOCK(st.st_mode)) return "socket";
+  return "special file";
+}
+
+/// Throws OutputTargetError unless `path` is a regular file or does not exist (the
+/// path itself, not what a symbolic link there points to). Other lstat(2) failures
+/// (a missing directory, no permission) are left to the file creation to report.
+inline void check_output_target(const std::string& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0 || S_ISREG(st.st_mode)) return;
+  std::string what = file_type_name(st);
+  if (S_ISLNK(st.st_mode)) {
+    std::vector<char> buf(4096);
+    const ssize_t n = ::readlink(path.c_str(), buf.data(), buf.size() - 1);
+    if (n >= 0) what += " to " + std::string(buf.data(), static_cast<std::size_t>(n));
+  }
+  throw OutputTargetError(path + ": is a " + what +
+                          ", not a regular file (outputs are written only to regular files or "
+                          "new paths)");
+}
+
 class AtomicFile {
  public:
-  /// Creates the temporary file "<dir>/.<name>.XXXXXX"; throws std::runtime_error when
-  /// that is impossible (missing directory, no permission).
+  /// Creates the temporary file "<dir>/.<name>.XXXXXX"; throws OutputTargetError when
+  /// the target is not a regular file (check_output_target), std::runtime_error when
+  /// the temporary file cannot be created (missing directory, no permission).
   explicit AtomicFile(std::string path) : path_(std::move(path)) {
+    check_output_target(path_);
     const std::size_t slash = path_.find_last_of('/');
     const std::string dir = slash == std::string::npos ? std::string() : path_.substr(0, slash + 1);
     const std::string base = slash == std::string::npos ? path_ : path_.substr(slash + 1);
@@ -63,7 +105,8 @@ class AtomicFile {
   }
 
   /// Flushes, closes and renames the temporary file onto the target. Throws on any I/O
-  /// error (the temporary file is then removed).
+  /// error, and OutputTargetError when the target has meanwhile become something other
+  /// than a regular file (the temporary file is then removed).
   void commit() {
     if (file_ == nullptr) throw std::logic_error(path_ + ": already closed");
     const bool write_error = std::ferror(file_) != 0;
@@ -73,6 +116,13 @@ class AtomicFile {
       ::unlink(temp_.c_str());
       temp_.clear();
       throw std::runtime_error(path_ + ": write failed");
+    }
+    try {
+      check_output_target(path_);
+    } catch (...) {
+      ::unlink(temp_.c_str());
+      temp_.clear();
+      throw;
     }
     if (std::rename(temp_.c_str(), path_.c_str()) != 0) {
       const int err = errno;

@@ -8,10 +8,15 @@
 // --out DIR writes DIR/trace.csv and DIR/summary.json (DIR is created); --trace and
 // --summary name the files explicitly (and override --out for that file). Outputs are
 // written atomically, and only after a complete run: a malformed scenario file or a
-// failed run leaves no output behind.
+// failed run leaves no output behind. An output replaces what its path names, so that
+// must be a regular file or nothing yet: a directory, FIFO, device, socket or symbolic
+// link there (or an --out DIR that is not a directory) is refused with status 2 before
+// the run, and left as it was.
 // Exit status: 0 ok; 1 an expectation was violated (with --table: some summary says
-// FAIL) and --check was given; 2 usage error
-// or malformed / invalid scenario file; 3 I/O or other run-time error.
+// FAIL) and --check was given; 2 usage error, malformed / invalid scenario file, or an
+// output path that is not a regular file; 3 I/O or other run-time error.
+#include <sys/stat.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -202,6 +207,25 @@ int run_scenario(const Options& o) {
   const ip::ScenarioSpec& spec = sf.spec;
 
   std::string trace_path = o.trace, summary_path = o.summary;
+  if (!o.out_dir.empty()) {
+    if (trace_path.empty()) trace_path = o.out_dir + "/trace.csv";
+    if (summary_path.empty()) summary_path = o.out_dir + "/summary.json";
+  }
+  // Every output is checked before anything is written or run: the outputs replace
+  // what their paths name, which must be regular files or nothing yet.
+  try {
+    if (!o.out_dir.empty()) {
+      struct stat st {};
+      if (::stat(o.out_dir.c_str(), &st) == 0 && !S_ISDIR(st.st_mode))
+        throw ex::OutputTargetError(o.out_dir + ": is a " + ex::file_type_name(st) +
+                                    ", not a directory (--out)");
+    }
+    for (const std::string* p : {&trace_path, &summary_path})
+      if (!p->empty()) ex::check_output_target(*p);
+  } catch (const ex::OutputTargetError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBadInput;
+  }
   // A directory this run creates is removed again if the run fails (it is empty then:
   // the outputs appear only at the end).
   bool created_out_dir = false;
@@ -210,11 +234,7 @@ int run_scenario(const Options& o) {
     if (created_out_dir) std::filesystem::remove(o.out_dir, ec);  // only if empty
   };
   try {
-    if (!o.out_dir.empty()) {
-      created_out_dir = std::filesystem::create_directories(o.out_dir);
-      if (trace_path.empty()) trace_path = o.out_dir + "/trace.csv";
-      if (summary_path.empty()) summary_path = o.out_dir + "/summary.json";
-    }
+    if (!o.out_dir.empty()) created_out_dir = std::filesystem::create_directories(o.out_dir);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s: %s\n", o.out_dir.c_str(), e.what());
     return kExitRuntime;
@@ -324,6 +344,13 @@ int main(int argc, char** argv) {
   app.add_flag("--check", o.check, "exit with status 1 when an expectation is violated");
   app.add_flag("--quiet", o.quiet, "print nothing but errors and violations");
   app.add_flag("--table", o.table, "print one table row per summary file instead of running");
+  app.footer(
+      "Outputs appear only after a complete run. Each output path must name a regular file\n"
+      "or nothing yet: a directory, FIFO, device, socket or symbolic link there is refused\n"
+      "(status 2) before the run.\n"
+      "Exit status: 0 ok; 1 an expectation was violated (--table: some summary says FAIL)\n"
+      "and --check was given; 2 usage error, malformed or invalid scenario file, or an\n"
+      "output path that is not a regular file; 3 I/O or other run-time error.");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

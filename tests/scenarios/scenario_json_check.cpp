@@ -6,6 +6,7 @@
 // glob does not link).
 #include <dirent.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -949,6 +950,51 @@ TEST(AtomicFile, AppearsOnlyOnCommit) {
   EXPECT_EQ(read_text(target), "v1\n");  // the old version is untouched
   ASSERT_EQ(list_dir(d).size(), 1u);
   EXPECT_THROW(ex::AtomicFile(d + "/missing_dir/out.txt"), std::runtime_error);
+}
+
+// The rename would replace whatever the target path names: anything but a regular
+// file (or nothing) is refused, and stays as it was.
+TEST(AtomicFile, RefusesTargetsThatAreNotRegularFiles) {
+  const std::string d = fresh_dir("atomic_targets");
+  const std::string regular = d + "/regular.txt", fifo = d + "/fifo", link = d + "/link",
+                    dangling = d + "/dangling", sub = d + "/sub";
+  ex::write_file_atomically(regular, "keep\n");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::filesystem::create_symlink("regular.txt", link);
+  std::filesystem::create_symlink("missing.txt", dangling);
+  std::filesystem::create_directory(sub);
+  const auto refused = [](const std::string& path, const std::string& what) {
+    try {
+      ex::AtomicFile f(path);
+      ADD_FAILURE() << path << " accepted";
+    } catch (const ex::OutputTargetError& e) {
+      EXPECT_EQ(std::string(e.what()), path + ": is a " + what +
+                                           ", not a regular file (outputs are written only to "
+                                           "regular files or new paths)");
+    }
+  };
+  refused(fifo, "FIFO");
+  refused(link, "symbolic link to regular.txt");
+  refused(dangling, "symbolic link to missing.txt");
+  refused(sub, "directory");
+  refused("/dev/null", "character device");  // only checked: nothing is created in /dev
+  EXPECT_NO_THROW(ex::check_output_target(regular));
+  EXPECT_NO_THROW(ex::check_output_target(d + "/new.txt"));
+  EXPECT_EQ(list_dir(d).size(), 5u);  // no temporary file was left
+  EXPECT_EQ(read_text(link), "keep\n");
+
+  // Checked again before the rename: a FIFO that appeared meanwhile is not replaced.
+  const std::string later = d + "/later";
+  {
+    ex::AtomicFile f(later);
+    f.write("text");
+    ASSERT_EQ(::mkfifo(later.c_str(), 0600), 0);
+    EXPECT_THROW(f.commit(), ex::OutputTargetError);
+  }
+  struct stat st {};
+  ASSERT_EQ(::lstat(later.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  EXPECT_EQ(list_dir(d).size(), 6u);
 }
 
 std::vector<std::string> split(const std::string& line) {

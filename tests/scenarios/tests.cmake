@@ -5,7 +5,8 @@
 #   scenario.<dir>.<name>   one per shipped scenario file: inhand_scenario <file> --check
 #       --quiet --out <build>/scenario-out/<name> (fails when an expectation is violated)
 #   scenario_cli.*          exit status, messages and (absence of) output files of
-#       inhand_scenario for a violated expectation, a truncated and an invalid file
+#       inhand_scenario for a violated expectation, a truncated and an invalid file, and
+#       output paths that name a FIFO or a symbolic link
 #   scenario.paper_files_up_to_date   scripts/gen_paper_scenarios.py --check
 find_package(nlohmann_json 3 REQUIRED)
 set(INHAND_SCENARIOS_DIR ${PROJECT_SOURCE_DIR}/scenarios)
@@ -41,24 +42,34 @@ if(INHAND_BUILD_EXAMPLES)
 
   set(cli_data ${CMAKE_CURRENT_LIST_DIR}/data)
   set(cli_out ${PROJECT_BINARY_DIR}/scenario-out/cli)
-  add_test(NAME scenario_cli.violation
-    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario>
-            -DSCENARIO=${cli_data}/violated_expectation.json -DOUT_DIR=${cli_out}/violation
-            -DEXPECT_EXIT=1 "-DEXPECT_OUTPUT=2 expectation\\(s\\) violated.*max_position_error.*expected to drop"
-            -DEXPECT_FILES=ON -DTABLE_EXIT=1 "-DTABLE_OUTPUT=violated_expectation.*FAIL.*1 failed"
-            -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
-  add_test(NAME scenario_cli.truncated_file
-    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario>
-            -DSCENARIO=${cli_data}/truncated.json -DOUT_DIR=${cli_out}/truncated
-            -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=truncated.json: object: malformed JSON.*end of input"
-            -DEXPECT_FILES=OFF -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
-  add_test(NAME scenario_cli.invalid_value
-    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario>
-            -DSCENARIO=${cli_data}/invalid_value.json -DOUT_DIR=${cli_out}/invalid
-            -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=invalid_value.json: object.mass: must be a number in \\(0, 100\\], got -1"
-            -DEXPECT_FILES=OFF -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
-  set_tests_properties(scenario_cli.violation scenario_cli.truncated_file scenario_cli.invalid_value
-    PROPERTIES LABELS scenario TIMEOUT 120)
+  # scenario_cli.<name>: cli_check.cmake on tests/scenarios/data/<data>, output directory
+  # <build>/scenario-out/cli/<name>; the further arguments are its -D definitions (a
+  # regex matches ']' with '.': CMake lists do not pass an unbalanced bracket intact).
+  function(inhand_scenario_cli_test name data)
+    add_test(NAME scenario_cli.${name}
+      COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario> -DSCENARIO=${cli_data}/${data}
+              -DOUT_DIR=${cli_out}/${name} ${ARGN} -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
+    set_tests_properties(scenario_cli.${name} PROPERTIES LABELS scenario TIMEOUT 120)
+  endfunction()
+  inhand_scenario_cli_test(violation violated_expectation.json
+    -DEXPECT_EXIT=1 "-DEXPECT_OUTPUT=2 expectation\\(s\\) violated.*max_position_error.*expected to drop"
+    -DEXPECT_FILES=ON -DTABLE_EXIT=1 "-DTABLE_OUTPUT=violated_expectation.*FAIL.*1 failed")
+  inhand_scenario_cli_test(truncated_file truncated.json
+    -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=truncated.json: object: malformed JSON.*end of input"
+    -DEXPECT_FILES=OFF)
+  inhand_scenario_cli_test(invalid_value invalid_value.json
+    -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=invalid_value.json: object.mass: must be a number in \\(0, 100., got -1"
+    -DEXPECT_FILES=OFF)
+  # Outputs only replace regular files: a FIFO or a symbolic link where an output goes is
+  # refused before the run and left as it was.
+  inhand_scenario_cli_test(fifo_target violated_expectation.json
+    -DPREPARE=fifo:trace.csv -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: .*/fifo_target/trace.csv: is a FIFO, not a regular file"
+    -DEXPECT_FILES=OFF)
+  inhand_scenario_cli_test(symlink_target violated_expectation.json
+    -DPREPARE=symlink:summary.json -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: .*/symlink_target/summary.json: is a symbolic link to .*/symlink_target.target, not a regular file"
+    -DEXPECT_FILES=OFF)
 endif()
 
 find_package(Python3 COMPONENTS Interpreter QUIET)
