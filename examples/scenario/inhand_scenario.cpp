@@ -6,12 +6,15 @@
 //   inhand_scenario --table SUMMARY.json... [--check]
 //
 // --out DIR writes DIR/trace.csv and DIR/summary.json (DIR is created); --trace and
-// --summary name the files explicitly (and override --out for that file). Outputs are
-// written atomically, and only after a complete run: a malformed scenario file or a
-// failed run leaves no output behind. An output replaces what its path names, so that
-// must be a regular file or nothing yet: a directory, FIFO, device, socket or symbolic
-// link there (or an --out DIR that is not a directory) is refused with status 2 before
-// the run, and left as it was.
+// --summary name the files explicitly (and override --out for that file). Every output
+// path is checked, and every temporary output file (next to its target) created, before
+// the simulation starts; the files are renamed onto their targets only when all are
+// complete. A malformed scenario file, a failed run, or a run killed by SIGINT, SIGTERM
+// or SIGHUP leaves no output behind: no target is changed, the temporary files are
+// removed, and so is the --out directory if this run created it. An output replaces
+// what its path names, so that must be a regular file or nothing yet: a directory,
+// FIFO, device, socket or symbolic link there (or an --out DIR that is not a directory)
+// is refused with status 2 before the run, and left as it was.
 // Exit status: 0 ok; 1 an expectation was violated (with --table: some summary says
 // FAIL) and --check was given; 2 usage error, malformed / invalid scenario file, or an
 // output path that is not a regular file; 3 I/O or other run-time error.
@@ -226,31 +229,48 @@ int run_scenario(const Options& o) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;
   }
-  // A directory this run creates is removed again if the run fails (it is empty then:
-  // the outputs appear only at the end).
+  // A directory this run creates is removed again if the run fails or is killed (it is
+  // empty then: the outputs appear only at the end).
   bool created_out_dir = false;
   auto remove_created_dir = [&]() {
+    ex::remove_directory_on_signals(nullptr);
     std::error_code ec;
     if (created_out_dir) std::filesystem::remove(o.out_dir, ec);  // only if empty
   };
+  // Both temporary files exist before the run (so an output that cannot be created
+  // fails it early), both are complete before either is renamed, and a failure or a
+  // termination signal removes them.
+  std::unique_ptr<ex::TraceCsvWriter<3>> trace;
+  std::unique_ptr<ex::AtomicFile> summary_file;
   try {
     if (!o.out_dir.empty()) created_out_dir = std::filesystem::create_directories(o.out_dir);
+    if (created_out_dir) ex::remove_directory_on_signals(o.out_dir.c_str());
+    if (!trace_path.empty())
+      trace = std::make_unique<ex::TraceCsvWriter<3>>(trace_path, spec.hand.finger_names,
+                                                      spec.object.pose.rotation);
+    if (!summary_path.empty()) summary_file = std::make_unique<ex::AtomicFile>(summary_path);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s: %s\n", o.out_dir.c_str(), e.what());
+    trace.reset();
+    summary_file.reset();
+    remove_created_dir();
+    std::fprintf(stderr, "error: %s\n", e.what());
     return kExitRuntime;
   }
+  auto fail = [&](int status, const std::string& message) {
+    trace.reset();
+    summary_file.reset();
+    remove_created_dir();
+    std::fprintf(stderr, "error: %s\n", message.c_str());
+    return status;
+  };
 
   ex::RunSummary summary;
   summary.scenario = spec.name;
   summary.finger_names = spec.hand.finger_names;
   summary.expectations_checked = !sf.expect.empty();
   ip::ScenarioResult result;
-  std::unique_ptr<ex::TraceCsvWriter<3>> trace;
   const auto wall0 = std::chrono::steady_clock::now();
   try {
-    if (!trace_path.empty())
-      trace = std::make_unique<ex::TraceCsvWriter<3>>(trace_path, spec.hand.finger_names,
-                                                      spec.object.pose.rotation);
     ex::TraceRow<3> row;
     ip::ScenarioRunner::TickObserver observer;
     if (trace) {
@@ -267,15 +287,9 @@ int run_scenario(const Options& o) {
     }
     result = ip::ScenarioRunner().run(spec, observer);
   } catch (const std::invalid_argument& e) {
-    trace.reset();
-    remove_created_dir();
-    std::fprintf(stderr, "error: %s: invalid scenario: %s\n", o.files.front().c_str(), e.what());
-    return kExitBadInput;
+    return fail(kExitBadInput, o.files.front() + ": invalid scenario: " + e.what());
   } catch (const std::exception& e) {
-    trace.reset();
-    remove_created_dir();
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitRuntime;
+    return fail(kExitRuntime, e.what());
   }
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -286,20 +300,12 @@ int run_scenario(const Options& o) {
   for (std::string& v : ex::check_fault_expectations(sf.fault_expect, result.faults))
     summary.violations.push_back(std::move(v));
   try {
-    // Both files are complete before either appears.
-    std::unique_ptr<ex::AtomicFile> summary_file;
-    if (!summary_path.empty()) {
-      summary_file = std::make_unique<ex::AtomicFile>(summary_path);
-      summary_file->write(summary_document(summary, result).dump(2) + "\n");
-    }
-    if (trace) trace->commit();
-    if (summary_file) summary_file->commit();
+    if (summary_file) summary_file->write(summary_document(summary, result).dump(2) + "\n");
+    ex::commit_together({trace ? &trace->file() : nullptr, summary_file.get()});
   } catch (const std::exception& e) {
-    trace.reset();
-    remove_created_dir();
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitRuntime;
+    return fail(kExitRuntime, e.what());
   }
+  ex::remove_directory_on_signals(nullptr);
 
   if (!o.quiet) {
     std::printf("scenario %s (%s hand, %zu stages): %.1f s simulated in %.2f s\n",
@@ -345,9 +351,10 @@ int main(int argc, char** argv) {
   app.add_flag("--quiet", o.quiet, "print nothing but errors and violations");
   app.add_flag("--table", o.table, "print one table row per summary file instead of running");
   app.footer(
-      "Outputs appear only after a complete run. Each output path must name a regular file\n"
-      "or nothing yet: a directory, FIFO, device, socket or symbolic link there is refused\n"
-      "(status 2) before the run.\n"
+      "Outputs appear together, only after a complete run; a failed run, or one killed by\n"
+      "SIGINT, SIGTERM or SIGHUP, leaves nothing behind. Each output path must name a\n"
+      "regular file or nothing yet: a directory, FIFO, device, socket or symbolic link there\n"
+      "is refused (status 2) before the run.\n"
       "Exit status: 0 ok; 1 an expectation was violated (--table: some summary says FAIL)\n"
       "and --check was given; 2 usage error, malformed or invalid scenario file, or an\n"
       "output path that is not a regular file; 3 I/O or other run-time error.");
@@ -367,5 +374,6 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: expected exactly one scenario file, got %zu\n", o.files.size());
     return kExitBadInput;
   }
+  ex::remove_temporaries_on_signals();
   return run_scenario(o);
 }

@@ -997,6 +997,41 @@ TEST(AtomicFile, RefusesTargetsThatAreNotRegularFiles) {
   EXPECT_EQ(list_dir(d).size(), 6u);
 }
 
+// Outputs committed together appear together or not at all.
+TEST(AtomicFile, CommitTogetherIsAllOrNothing) {
+  const std::string d = fresh_dir("atomic_together");
+  const std::string a = d + "/a.txt", b = d + "/b.txt";
+  {
+    ex::AtomicFile fa(a), fb(b);
+    fa.write("a\n");
+    fb.write("b\n");
+    ex::commit_together({&fa, nullptr, &fb});
+  }
+  EXPECT_EQ(read_text(a), "a\n");
+  EXPECT_EQ(read_text(b), "b\n");
+  std::filesystem::remove(a);
+  std::filesystem::remove(b);
+
+  // b's target turns into a directory: checked before any rename, a.txt never appears.
+  {
+    ex::AtomicFile fa(a), fb(b);
+    std::filesystem::create_directory(b);
+    EXPECT_THROW(ex::commit_together({&fa, &fb}), ex::OutputTargetError);
+  }
+  EXPECT_EQ(list_dir(d), std::vector<std::string>{"b.txt"});
+  std::filesystem::remove(b);
+
+  // b's rename fails after a's succeeded (its temporary file vanished): a.txt is
+  // removed again.
+  {
+    ex::AtomicFile fa(a), fb(b);
+    for (const std::string& n : list_dir(d))
+      if (n.rfind(".b.txt.", 0) == 0) std::filesystem::remove(d + "/" + n);
+    EXPECT_THROW(ex::commit_together({&fa, &fb}), std::runtime_error);
+  }
+  EXPECT_TRUE(list_dir(d).empty());
+}
+
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> out;
   std::string cell;

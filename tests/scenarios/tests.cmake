@@ -5,8 +5,9 @@
 #   scenario.<dir>.<name>   one per shipped scenario file: inhand_scenario <file> --check
 #       --quiet --out <build>/scenario-out/<name> (fails when an expectation is violated)
 #   scenario_cli.*          exit status, messages and (absence of) output files of
-#       inhand_scenario for a violated expectation, a truncated and an invalid file, and
-#       output paths that name a FIFO or a symbolic link
+#       inhand_scenario for a violated expectation, a truncated and an invalid file,
+#       output paths that name a FIFO, a symbolic link or a directory, and runs killed by
+#       SIGTERM or SIGINT (signal_check.sh)
 #   scenario.paper_files_up_to_date   scripts/gen_paper_scenarios.py --check
 find_package(nlohmann_json 3 REQUIRED)
 set(INHAND_SCENARIOS_DIR ${PROJECT_SOURCE_DIR}/scenarios)
@@ -70,6 +71,22 @@ if(INHAND_BUILD_EXAMPLES)
     -DPREPARE=symlink:summary.json -DEXPECT_EXIT=2
     "-DEXPECT_OUTPUT=^error: .*/symlink_target/summary.json: is a symbolic link to .*/symlink_target.target, not a regular file"
     -DEXPECT_FILES=OFF)
+  # A failed or interrupted run leaves nothing: with summary.json a directory no trace.csv
+  # appears either; SIGTERM / SIGINT during a run remove its temporary files.
+  inhand_scenario_cli_test(directory_target violated_expectation.json
+    -DPREPARE=dir:summary.json -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: .*/directory_target/summary.json: is a directory, not a regular file"
+    -DEXPECT_FILES=OFF)
+  find_program(INHAND_BASH bash)
+  if(INHAND_BASH)
+    foreach(sig TERM INT)
+      add_test(NAME scenario_cli.killed_by_sig${sig}
+        COMMAND ${INHAND_BASH} ${CMAKE_CURRENT_LIST_DIR}/signal_check.sh
+                $<TARGET_FILE:inhand_scenario> ${cli_data}/long_hold.json
+                ${cli_out}/killed_by_sig${sig} ${sig})
+      set_tests_properties(scenario_cli.killed_by_sig${sig} PROPERTIES LABELS scenario TIMEOUT 60)
+    endforeach()
+  endif()
 endif()
 
 find_package(Python3 COMPONENTS Interpreter QUIET)
