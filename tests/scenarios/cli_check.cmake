@@ -5,7 +5,8 @@
 #                                      nothing at all (OFF: a failed run writes nothing)
 #   -DTABLE_EXIT=<n> -DTABLE_OUTPUT=<regex>  optional: then `--table OUT_DIR/summary.json
 #                                      --check` must exit TABLE_EXIT and print TABLE_OUTPUT
-#   -DARGS=<arg;...>                   optional: more arguments for the run
+#   -DARGS=<args>                      optional: more arguments for the run, separated by
+#                                      spaces (e.g. "--max-trace-rows=0 --quiet")
 #   -DPREPARE=<kind>:<name>            optional: OUT_DIR/<name> exists before the run as a
 #                                      fifo, a directory (dir) or a symbolic link (symlink)
 #                                      to the regular file OUT_DIR.target; after the run it
@@ -33,7 +34,8 @@ if(DEFINED PREPARE)
     message(FATAL_ERROR "cannot create ${prepared}: ${mk}")
   endif()
 endif()
-execute_process(COMMAND ${EXE} ${SCENARIO} --out ${OUT_DIR} --check ${ARGS}
+separate_arguments(args UNIX_COMMAND "${ARGS}")
+execute_process(COMMAND ${EXE} ${SCENARIO} --out ${OUT_DIR} --check ${args}
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message("exit ${rc}\n--- stdout\n${out}--- stderr\n${err}")
 if(NOT rc EQUAL EXPECT_EXIT)

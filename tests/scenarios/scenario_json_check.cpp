@@ -824,6 +824,46 @@ ip::StageMetrics stage(const std::string& name, ip::StageKind kind) {
   return m;
 }
 
+// run_size() is what the runner's bounds compare: the ticks and plant steps a run takes
+// when its grasp runs to the timeout, and exactly those of every later stage.
+TEST(ScenarioJson, RunSizeBoundsTheRunnersWork) {
+  Json j = base_scenario();
+  j["stages"][1]["duration"] = 0.2;
+  j["stages"][2]["settle"] = 0.1;
+  j["stages"][2]["segments"][0]["duration"] = 0.2;
+  j["plant"]["time_step"] = 2.5e-5;
+  const ip::ScenarioSpec spec = ex::parse_scenario(j).spec;
+  const ex::RunSize size = ex::run_size(spec);
+  EXPECT_DOUBLE_EQ(size.simulated_time, 3.5);
+  EXPECT_EQ(size.control_ticks, 3500.0);
+  EXPECT_EQ(size.plant_steps, 140000.0);
+
+  std::vector<long> ticks(spec.stages.size(), 0);
+  std::int64_t steps = 0;
+  const ip::ScenarioResult r = ip::ScenarioRunner().run(spec, [&](const ip::TickRecord& rec) {
+    ++ticks[static_cast<std::size_t>(rec.stage)];
+    steps = rec.plant->step_count();
+  });
+  ASSERT_TRUE(r.failure.empty()) << r.failure;
+  EXPECT_GT(ticks[0], 0);
+  EXPECT_LT(ticks[0], 3000);  // the grasp completed before its timeout
+  EXPECT_EQ(ticks[1], 200);
+  EXPECT_EQ(ticks[2], 300);
+  const long run_ticks = ticks[0] + ticks[1] + ticks[2];
+  EXPECT_EQ(steps, 40 * run_ticks);
+  EXPECT_EQ(size.control_ticks - static_cast<double>(run_ticks), 3000.0 - ticks[0]);
+
+  // Counts beyond any integer type stay finite and exact enough to compare.
+  j["plant"]["time_step"] = 1e-12;
+  EXPECT_DOUBLE_EQ(ex::run_size(ex::parse_scenario(j).spec).plant_steps, 3.5e12);
+  j["plant"]["time_step"] = 1e-300;
+  j["controller"]["control_period"] = 1e-300;
+  j["controller"]["max_tick"] = 1e-300;
+  const ex::RunSize huge = ex::run_size(ex::parse_scenario(j).spec);
+  EXPECT_DOUBLE_EQ(huge.control_ticks, 3.5e300);
+  EXPECT_DOUBLE_EQ(huge.plant_steps, 3.5e300);
+}
+
 TEST(Expectations, ReportsEachViolatedBound) {
   const Json e = ex::parse_json_text(R"({
     "all": {"must_not_drop": true, "max_contact_losses": 0},

@@ -6,8 +6,8 @@
 #       --quiet --out <build>/scenario-out/<name> (fails when an expectation is violated)
 #   scenario_cli.*          exit status, messages and (absence of) output files of
 #       inhand_scenario for a violated expectation, a truncated and an invalid file,
-#       output paths that name a FIFO, a symbolic link or a directory, and runs killed by
-#       SIGTERM or SIGINT (signal_check.sh)
+#       output paths that name a FIFO, a symbolic link or a directory, runs killed by
+#       SIGTERM or SIGINT (signal_check.sh), and the bounds on plant steps and trace rows
 #   scenario.paper_files_up_to_date   scripts/gen_paper_scenarios.py --check
 find_package(nlohmann_json 3 REQUIRED)
 set(INHAND_SCENARIOS_DIR ${PROJECT_SOURCE_DIR}/scenarios)
@@ -77,6 +77,33 @@ if(INHAND_BUILD_EXAMPLES)
     -DPREPARE=dir:summary.json -DEXPECT_EXIT=2
     "-DEXPECT_OUTPUT=^error: .*/directory_target/summary.json: is a directory, not a regular file"
     -DEXPECT_FILES=OFF)
+  # Bounds on the work, checked before the run (which would otherwise take hours: the
+  # short timeout fails a runner that starts it). The figures are upper bounds computed
+  # from the file: violated_expectation.json is 3.3 s of 1 ms ticks and 0.1 ms steps.
+  set(bound_message "more than the bound of")
+  inhand_scenario_cli_test(plant_step_bound tiny_time_step.json -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: [^ ]*tiny_time_step.json: the run takes up to 3000000000000 plant steps \\(3 s simulated at plant.time_step 1e-12 s\\), ${bound_message} 1000000000. raise it with --max-plant-steps N \\(0: no bound\\)"
+    -DEXPECT_FILES=OFF)
+  inhand_scenario_cli_test(trace_row_bound long_trace.json -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: [^ ]*long_trace.json: the trace takes up to 3500000 rows \\(one per control tick: 3500 s simulated at controller.control_period 0.001 s\\), ${bound_message} 250000. raise it with --max-trace-rows N \\(0: no bound\\)"
+    -DEXPECT_FILES=OFF)
+  # Lowered to one below, exactly at, and lifted (0): <name>|<arguments>|<exit>|<output>|<files>
+  foreach(case
+      "plant_step_bound_lowered|--max-plant-steps=32999|2|up to 33000 plant steps .*${bound_message} 32999|OFF"
+      "trace_row_bound_lowered|--max-trace-rows=3299|2|up to 3300 rows .*${bound_message} 3299|OFF"
+      "bounds_just_met|--max-plant-steps=33000 --max-trace-rows=3300|1|2 expectation|ON"
+      "bounds_lifted|--max-plant-steps=0 --max-trace-rows=0 --quiet|1|2 expectation|ON")
+    string(REPLACE "|" ";" fields "${case}")
+    list(GET fields 0 name)
+    list(GET fields 1 args)
+    list(GET fields 2 status)
+    list(GET fields 3 output)
+    list(GET fields 4 files)
+    inhand_scenario_cli_test(${name} violated_expectation.json "-DARGS=${args}"
+      -DEXPECT_EXIT=${status} "-DEXPECT_OUTPUT=${output}" -DEXPECT_FILES=${files})
+  endforeach()
+  set_tests_properties(scenario_cli.plant_step_bound scenario_cli.trace_row_bound
+    PROPERTIES TIMEOUT 20)
   find_program(INHAND_BASH bash)
   if(INHAND_BASH)
     foreach(sig TERM INT)
