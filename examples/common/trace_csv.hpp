@@ -188,6 +188,8 @@ class TraceCsvWriter {
   long rows() const noexcept { return rows_; }
   /// Makes the file appear at its path; throws on I/O errors.
   void commit() { file_.commit(); }
+  /// The output file, e.g. to commit it together with others (commit_together()).
+  AtomicFile& file() noexcept { return file_; }
 
  private:
   void pose(std::FILE* f, const Pose<double, Dim>& p) const {

@@ -371,6 +371,29 @@ inline double stage_time(const plant::StageSpec& s) {
 
 }  // namespace scenario_detail
 
+/// Upper bounds on the work of a run of `spec` by plant::ScenarioRunner, known before it
+/// starts (reached unless a grasp completes before its timeout or the run stops early).
+/// Doubles: a tiny time step may give counts beyond any integer type.
+struct RunSize {
+  double simulated_time = 0.0;  ///< s, all stages
+  double control_ticks = 0.0;   ///< controller updates = rows of a trace
+  double plant_steps = 0.0;     ///< internal integration steps of the plant
+};
+
+/// As the runner counts: round(stage time / control_period) ticks per stage, each
+/// advancing the plant by control_period / time_step steps.
+inline RunSize run_size(const plant::ScenarioSpec& spec) {
+  RunSize r;
+  const double dt = spec.controller.control_period;
+  for (const plant::StageSpec& st : spec.stages) {
+    const double t = scenario_detail::stage_time(st);
+    r.simulated_time += t;
+    r.control_ticks += std::round(t / dt);
+  }
+  r.plant_steps = std::round(r.control_ticks * dt / spec.plant.time_step);
+  return r;
+}
+
 /// Builds a ScenarioFile from parsed JSON; throws JsonError (see the file comment).
 inline ScenarioFile parse_scenario(const Json& j) {
   ScenarioFile out;

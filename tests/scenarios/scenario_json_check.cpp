@@ -6,6 +6,7 @@
 // glob does not link).
 #include <dirent.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -823,6 +824,46 @@ ip::StageMetrics stage(const std::string& name, ip::StageKind kind) {
   return m;
 }
 
+// run_size() is what the runner's bounds compare: the ticks and plant steps a run takes
+// when its grasp runs to the timeout, and exactly those of every later stage.
+TEST(ScenarioJson, RunSizeBoundsTheRunnersWork) {
+  Json j = base_scenario();
+  j["stages"][1]["duration"] = 0.2;
+  j["stages"][2]["settle"] = 0.1;
+  j["stages"][2]["segments"][0]["duration"] = 0.2;
+  j["plant"]["time_step"] = 2.5e-5;
+  const ip::ScenarioSpec spec = ex::parse_scenario(j).spec;
+  const ex::RunSize size = ex::run_size(spec);
+  EXPECT_DOUBLE_EQ(size.simulated_time, 3.5);
+  EXPECT_EQ(size.control_ticks, 3500.0);
+  EXPECT_EQ(size.plant_steps, 140000.0);
+
+  std::vector<long> ticks(spec.stages.size(), 0);
+  std::int64_t steps = 0;
+  const ip::ScenarioResult r = ip::ScenarioRunner().run(spec, [&](const ip::TickRecord& rec) {
+    ++ticks[static_cast<std::size_t>(rec.stage)];
+    steps = rec.plant->step_count();
+  });
+  ASSERT_TRUE(r.failure.empty()) << r.failure;
+  EXPECT_GT(ticks[0], 0);
+  EXPECT_LT(ticks[0], 3000);  // the grasp completed before its timeout
+  EXPECT_EQ(ticks[1], 200);
+  EXPECT_EQ(ticks[2], 300);
+  const long run_ticks = ticks[0] + ticks[1] + ticks[2];
+  EXPECT_EQ(steps, 40 * run_ticks);
+  EXPECT_EQ(size.control_ticks - static_cast<double>(run_ticks), 3000.0 - ticks[0]);
+
+  // Counts beyond any integer type stay finite and exact enough to compare.
+  j["plant"]["time_step"] = 1e-12;
+  EXPECT_DOUBLE_EQ(ex::run_size(ex::parse_scenario(j).spec).plant_steps, 3.5e12);
+  j["plant"]["time_step"] = 1e-300;
+  j["controller"]["control_period"] = 1e-300;
+  j["controller"]["max_tick"] = 1e-300;
+  const ex::RunSize huge = ex::run_size(ex::parse_scenario(j).spec);
+  EXPECT_DOUBLE_EQ(huge.control_ticks, 3.5e300);
+  EXPECT_DOUBLE_EQ(huge.plant_steps, 3.5e300);
+}
+
 TEST(Expectations, ReportsEachViolatedBound) {
   const Json e = ex::parse_json_text(R"({
     "all": {"must_not_drop": true, "max_contact_losses": 0},
@@ -949,6 +990,86 @@ TEST(AtomicFile, AppearsOnlyOnCommit) {
   EXPECT_EQ(read_text(target), "v1\n");  // the old version is untouched
   ASSERT_EQ(list_dir(d).size(), 1u);
   EXPECT_THROW(ex::AtomicFile(d + "/missing_dir/out.txt"), std::runtime_error);
+}
+
+// The rename would replace whatever the target path names: anything but a regular
+// file (or nothing) is refused, and stays as it was.
+TEST(AtomicFile, RefusesTargetsThatAreNotRegularFiles) {
+  const std::string d = fresh_dir("atomic_targets");
+  const std::string regular = d + "/regular.txt", fifo = d + "/fifo", link = d + "/link",
+                    dangling = d + "/dangling", sub = d + "/sub";
+  ex::write_file_atomically(regular, "keep\n");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::filesystem::create_symlink("regular.txt", link);
+  std::filesystem::create_symlink("missing.txt", dangling);
+  std::filesystem::create_directory(sub);
+  const auto refused = [](const std::string& path, const std::string& what) {
+    try {
+      ex::AtomicFile f(path);
+      ADD_FAILURE() << path << " accepted";
+    } catch (const ex::OutputTargetError& e) {
+      EXPECT_EQ(std::string(e.what()), path + ": is a " + what +
+                                           ", not a regular file (outputs are written only to "
+                                           "regular files or new paths)");
+    }
+  };
+  refused(fifo, "FIFO");
+  refused(link, "symbolic link to regular.txt");
+  refused(dangling, "symbolic link to missing.txt");
+  refused(sub, "directory");
+  refused("/dev/null", "character device");  // only checked: nothing is created in /dev
+  EXPECT_NO_THROW(ex::check_output_target(regular));
+  EXPECT_NO_THROW(ex::check_output_target(d + "/new.txt"));
+  EXPECT_EQ(list_dir(d).size(), 5u);  // no temporary file was left
+  EXPECT_EQ(read_text(link), "keep\n");
+
+  // Checked again before the rename: a FIFO that appeared meanwhile is not replaced.
+  const std::string later = d + "/later";
+  {
+    ex::AtomicFile f(later);
+    f.write("text");
+    ASSERT_EQ(::mkfifo(later.c_str(), 0600), 0);
+    EXPECT_THROW(f.commit(), ex::OutputTargetError);
+  }
+  struct stat st {};
+  ASSERT_EQ(::lstat(later.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  EXPECT_EQ(list_dir(d).size(), 6u);
+}
+
+// Outputs committed together appear together or not at all.
+TEST(AtomicFile, CommitTogetherIsAllOrNothing) {
+  const std::string d = fresh_dir("atomic_together");
+  const std::string a = d + "/a.txt", b = d + "/b.txt";
+  {
+    ex::AtomicFile fa(a), fb(b);
+    fa.write("a\n");
+    fb.write("b\n");
+    ex::commit_together({&fa, nullptr, &fb});
+  }
+  EXPECT_EQ(read_text(a), "a\n");
+  EXPECT_EQ(read_text(b), "b\n");
+  std::filesystem::remove(a);
+  std::filesystem::remove(b);
+
+  // b's target turns into a directory: checked before any rename, a.txt never appears.
+  {
+    ex::AtomicFile fa(a), fb(b);
+    std::filesystem::create_directory(b);
+    EXPECT_THROW(ex::commit_together({&fa, &fb}), ex::OutputTargetError);
+  }
+  EXPECT_EQ(list_dir(d), std::vector<std::string>{"b.txt"});
+  std::filesystem::remove(b);
+
+  // b's rename fails after a's succeeded (its temporary file vanished): a.txt is
+  // removed again.
+  {
+    ex::AtomicFile fa(a), fb(b);
+    for (const std::string& n : list_dir(d))
+      if (n.rfind(".b.txt.", 0) == 0) std::filesystem::remove(d + "/" + n);
+    EXPECT_THROW(ex::commit_together({&fa, &fb}), std::runtime_error);
+  }
+  EXPECT_TRUE(list_dir(d).empty());
 }
 
 std::vector<std::string> split(const std::string& line) {

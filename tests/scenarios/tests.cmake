@@ -5,7 +5,9 @@
 #   scenario.<dir>.<name>   one per shipped scenario file: inhand_scenario <file> --check
 #       --quiet --out <build>/scenario-out/<name> (fails when an expectation is violated)
 #   scenario_cli.*          exit status, messages and (absence of) output files of
-#       inhand_scenario for a violated expectation, a truncated and an invalid file
+#       inhand_scenario for a violated expectation, a truncated and an invalid file,
+#       output paths that name a FIFO, a symbolic link or a directory, runs killed by
+#       SIGTERM or SIGINT (signal_check.sh), and the bounds on plant steps and trace rows
 #   scenario.paper_files_up_to_date   scripts/gen_paper_scenarios.py --check
 find_package(nlohmann_json 3 REQUIRED)
 set(INHAND_SCENARIOS_DIR ${PROJECT_SOURCE_DIR}/scenarios)
@@ -41,24 +43,77 @@ if(INHAND_BUILD_EXAMPLES)
 
   set(cli_data ${CMAKE_CURRENT_LIST_DIR}/data)
   set(cli_out ${PROJECT_BINARY_DIR}/scenario-out/cli)
-  add_test(NAME scenario_cli.violation
-    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario>
-            -DSCENARIO=${cli_data}/violated_expectation.json -DOUT_DIR=${cli_out}/violation
-            -DEXPECT_EXIT=1 "-DEXPECT_OUTPUT=2 expectation\\(s\\) violated.*max_position_error.*expected to drop"
-            -DEXPECT_FILES=ON -DTABLE_EXIT=1 "-DTABLE_OUTPUT=violated_expectation.*FAIL.*1 failed"
-            -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
-  add_test(NAME scenario_cli.truncated_file
-    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario>
-            -DSCENARIO=${cli_data}/truncated.json -DOUT_DIR=${cli_out}/truncated
-            -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=truncated.json: object: malformed JSON.*end of input"
-            -DEXPECT_FILES=OFF -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
-  add_test(NAME scenario_cli.invalid_value
-    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario>
-            -DSCENARIO=${cli_data}/invalid_value.json -DOUT_DIR=${cli_out}/invalid
-            -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=invalid_value.json: object.mass: must be a number in \\(0, 100\\], got -1"
-            -DEXPECT_FILES=OFF -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
-  set_tests_properties(scenario_cli.violation scenario_cli.truncated_file scenario_cli.invalid_value
-    PROPERTIES LABELS scenario TIMEOUT 120)
+  # scenario_cli.<name>: cli_check.cmake on tests/scenarios/data/<data>, output directory
+  # <build>/scenario-out/cli/<name>; the further arguments are its -D definitions (a
+  # regex matches ']' with '.': CMake lists do not pass an unbalanced bracket intact).
+  function(inhand_scenario_cli_test name data)
+    add_test(NAME scenario_cli.${name}
+      COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:inhand_scenario> -DSCENARIO=${cli_data}/${data}
+              -DOUT_DIR=${cli_out}/${name} ${ARGN} -P ${CMAKE_CURRENT_LIST_DIR}/cli_check.cmake)
+    set_tests_properties(scenario_cli.${name} PROPERTIES LABELS scenario TIMEOUT 120)
+  endfunction()
+  inhand_scenario_cli_test(violation violated_expectation.json
+    -DEXPECT_EXIT=1 "-DEXPECT_OUTPUT=2 expectation\\(s\\) violated.*max_position_error.*expected to drop"
+    -DEXPECT_FILES=ON -DTABLE_EXIT=1 "-DTABLE_OUTPUT=violated_expectation.*FAIL.*1 failed")
+  inhand_scenario_cli_test(truncated_file truncated.json
+    -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=truncated.json: object: malformed JSON.*end of input"
+    -DEXPECT_FILES=OFF)
+  inhand_scenario_cli_test(invalid_value invalid_value.json
+    -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=invalid_value.json: object.mass: must be a number in \\(0, 100., got -1"
+    -DEXPECT_FILES=OFF)
+  # Outputs only replace regular files: a FIFO or a symbolic link where an output goes is
+  # refused before the run and left as it was.
+  inhand_scenario_cli_test(fifo_target violated_expectation.json
+    -DPREPARE=fifo:trace.csv -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: .*/fifo_target/trace.csv: is a FIFO, not a regular file"
+    -DEXPECT_FILES=OFF)
+  inhand_scenario_cli_test(symlink_target violated_expectation.json
+    -DPREPARE=symlink:summary.json -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: .*/symlink_target/summary.json: is a symbolic link to .*/symlink_target.target, not a regular file"
+    -DEXPECT_FILES=OFF)
+  # A failed or interrupted run leaves nothing: with summary.json a directory no trace.csv
+  # appears either; SIGTERM / SIGINT during a run remove its temporary files.
+  inhand_scenario_cli_test(directory_target violated_expectation.json
+    -DPREPARE=dir:summary.json -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: .*/directory_target/summary.json: is a directory, not a regular file"
+    -DEXPECT_FILES=OFF)
+  # Bounds on the work, checked before the run (which would otherwise take hours: the
+  # short timeout fails a runner that starts it). The figures are upper bounds computed
+  # from the file: violated_expectation.json is 3.3 s of 1 ms ticks and 0.1 ms steps.
+  set(bound_message "more than the bound of")
+  inhand_scenario_cli_test(plant_step_bound tiny_time_step.json -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: [^ ]*tiny_time_step.json: the run takes up to 3000000000000 plant steps \\(3 s simulated at plant.time_step 1e-12 s\\), ${bound_message} 1000000000. raise it with --max-plant-steps N \\(0: no bound\\)"
+    -DEXPECT_FILES=OFF)
+  inhand_scenario_cli_test(trace_row_bound long_trace.json -DEXPECT_EXIT=2
+    "-DEXPECT_OUTPUT=^error: [^ ]*long_trace.json: the trace takes up to 3500000 rows \\(one per control tick: 3500 s simulated at controller.control_period 0.001 s\\), ${bound_message} 250000. raise it with --max-trace-rows N \\(0: no bound\\)"
+    -DEXPECT_FILES=OFF)
+  # Lowered to one below, exactly at, and lifted (0): <name>|<arguments>|<exit>|<output>|<files>
+  foreach(case
+      "plant_step_bound_lowered|--max-plant-steps=32999|2|up to 33000 plant steps .*${bound_message} 32999|OFF"
+      "trace_row_bound_lowered|--max-trace-rows=3299|2|up to 3300 rows .*${bound_message} 3299|OFF"
+      "bounds_just_met|--max-plant-steps=33000 --max-trace-rows=3300|1|2 expectation|ON"
+      "bounds_lifted|--max-plant-steps=0 --max-trace-rows=0 --quiet|1|2 expectation|ON")
+    string(REPLACE "|" ";" fields "${case}")
+    list(GET fields 0 name)
+    list(GET fields 1 args)
+    list(GET fields 2 status)
+    list(GET fields 3 output)
+    list(GET fields 4 files)
+    inhand_scenario_cli_test(${name} violated_expectation.json "-DARGS=${args}"
+      -DEXPECT_EXIT=${status} "-DEXPECT_OUTPUT=${output}" -DEXPECT_FILES=${files})
+  endforeach()
+  set_tests_properties(scenario_cli.plant_step_bound scenario_cli.trace_row_bound
+    PROPERTIES TIMEOUT 20)
+  find_program(INHAND_BASH bash)
+  if(INHAND_BASH)
+    foreach(sig TERM INT)
+      add_test(NAME scenario_cli.killed_by_sig${sig}
+        COMMAND ${INHAND_BASH} ${CMAKE_CURRENT_LIST_DIR}/signal_check.sh
+                $<TARGET_FILE:inhand_scenario> ${cli_data}/long_hold.json
+                ${cli_out}/killed_by_sig${sig} ${sig})
+      set_tests_properties(scenario_cli.killed_by_sig${sig} PROPERTIES LABELS scenario TIMEOUT 60)
+    endforeach()
+  endif()
 endif()
 
 find_package(Python3 COMPONENTS Interpreter QUIET)
