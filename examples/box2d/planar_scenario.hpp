@@ -408,7 +408,8 @@ class ScenarioRunner {
         ft.touching = r.touching;
         ft.normal_force = r.normal_force;
         ft.slip_distance = world.slip_distance(i);
-        ft.desired_force = out.fingers[static_cast<std::size_t>(i)].desired_normal_force;
+        ft.desired_force = out.fingers[static_cast<std::size_t>(i)]
+                               .force_target;  // what the force loop drives to (force_layer.hpp)
       }
     };
     read_truth();

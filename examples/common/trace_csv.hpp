@@ -63,6 +63,7 @@ struct TraceRow {
   Pose<double, Dim> desired{}, measured{}, actual{};
   std::vector<TraceFinger<Dim>> fingers;
   double grip = 1.0;  ///< the force layer's grip scale
+  unsigned warnings = 0;  ///< ControllerWarning bits of the tick
   /// Load estimate (force; torque) and layer 1's pose-error integral (m s; rad s).
   Twist<double, Dim> load = Twist<double, Dim>::Zero();
   Twist<double, Dim> pose_integral = Twist<double, Dim>::Zero();
@@ -95,6 +96,7 @@ void fill_trace_fingers(const Input& in, const Output& out,
 template <int Dim, typename Output, typename Row>
 void fill_trace_hand(const Output& out, Row& row) {
   row.grip = out.grip;
+  row.warnings = static_cast<unsigned>(out.warnings);
   row.load = out.load_estimate;
   row.pose_integral = out.pose_error_integral;
 }
@@ -139,7 +141,7 @@ class TraceCsvWriter {
       h += "," + n + "_state," + n + "_ik";
       h += "," + n + "_k," + n + "_z," + n + "_slip";
     }
-    h += ",grip";
+    h += ",grip,warnings";
     const char* wrench3[] = {"fx", "fy", "fz", "tx", "ty", "tz"};
     const char* wrench2[] = {"fx", "fy", "tz"};
     for (const char* prefix : {"load_", "pint_"}) {
@@ -179,6 +181,7 @@ class TraceCsvWriter {
       std::fprintf(f, ",%d", t.slipping ? 1 : 0);
     }
     num(f, row.grip);
+    std::fprintf(f, ",%u", row.warnings);
     vec(f, row.load);
     vec(f, row.pose_integral);
     std::fputc('\n', f);

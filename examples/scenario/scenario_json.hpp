@@ -108,12 +108,18 @@ inline plant::PlantParams read_plant(ObjectReader r) {
                              Range::closed(-100.0, 100.0)));
   p.joint_velocity_lag =
       r.number("joint_velocity_lag", p.joint_velocity_lag, Range::non_negative_up_to(10.0));
+  p.command_delay = static_cast<int>(
+      r.integer("command_delay", p.command_delay, 0, plant::PlantParams::kMaxCommandDelay));
   ObjectReader s = r.object("sensing");
   plant::SensorNoise& n = p.sensing;
   n.normal_force_std =
       s.number("normal_force_std", n.normal_force_std, Range::non_negative_up_to(100.0));
   n.normal_force_bias =
       s.number("normal_force_bias", n.normal_force_bias, Range::closed(-100.0, 100.0));
+  n.normal_force_gain_error =
+      s.number("normal_force_gain_error", n.normal_force_gain_error, Range::closed(-0.9, 10.0));
+  n.normal_force_relative_std = s.number("normal_force_relative_std", n.normal_force_relative_std,
+                                         Range::non_negative_up_to(1.0));
   n.contact_point_std =
       s.number("contact_point_std", n.contact_point_std, Range::non_negative_up_to(0.1));
   n.normal_angle_std =

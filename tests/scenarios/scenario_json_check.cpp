@@ -403,6 +403,9 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
   EXPECT_EQ(p.contact.tangential_damping, d.contact.tangential_damping);
   EXPECT_EQ(p.gravity, d.gravity);
   EXPECT_EQ(p.joint_velocity_lag, d.joint_velocity_lag);
+  EXPECT_EQ(p.command_delay, d.command_delay);
+  EXPECT_EQ(p.sensing.normal_force_gain_error, d.sensing.normal_force_gain_error);
+  EXPECT_EQ(p.sensing.normal_force_relative_std, d.sensing.normal_force_relative_std);
   EXPECT_EQ(p.sensing.normal_force_std, d.sensing.normal_force_std);
   EXPECT_EQ(p.sensing.normal_force_bias, d.sensing.normal_force_bias);
   EXPECT_EQ(p.sensing.contact_point_std, d.sensing.contact_point_std);
@@ -417,6 +420,22 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
   EXPECT_EQ(c.control_period, dc.control_period);
   EXPECT_EQ(c.max_tick, dc.max_tick);
   EXPECT_EQ(c.max_joint_acceleration, dc.max_joint_acceleration);
+  {
+    const inhand::ForceLayerParams<double>& fa = c.force_layer;
+    const inhand::ForceLayerParams<double>& fb = dc.force_layer;
+    const double got_fl[] = {fa.bandwidth,      fa.integral_corner,       fa.min_stiffness,
+                             fa.max_stiffness,  fa.stiffness_window,      fa.min_excitation,
+                             fa.min_fit,        fa.max_integral_velocity, fa.slip_distance,
+                             fa.grip_rise_rate, fa.friction_margin,       fa.grip_decay_time,
+                             fa.rigid_tolerance};
+    const double want_fl[] = {fb.bandwidth,      fb.integral_corner,       fb.min_stiffness,
+                              fb.max_stiffness,  fb.stiffness_window,      fb.min_excitation,
+                              fb.min_fit,        fb.max_integral_velocity, fb.slip_distance,
+                              fb.grip_rise_rate, fb.friction_margin,       fb.grip_decay_time,
+                              fb.rigid_tolerance};
+    for (std::size_t k = 0; k < 13; ++k)
+      EXPECT_EQ(got_fl[k], want_fl[k]) << "force_layer field " << k;
+  }
   EXPECT_EQ(c.outlier_gates.max_object_speed, dc.outlier_gates.max_object_speed);
   EXPECT_EQ(c.outlier_gates.max_object_angular_speed, dc.outlier_gates.max_object_angular_speed);
   EXPECT_EQ(c.outlier_gates.max_force_rate, dc.outlier_gates.max_force_rate);
@@ -1118,7 +1137,7 @@ TEST(TraceCsv, SpatialRowsMatchTheHeader) {
   const std::vector<std::string> h = split(header), r = split(line);
   // time, stage, name; 3 poses; per finger 17 + stiffness, integral, slip; grip, load, pose
   // integral
-  ASSERT_EQ(h.size(), 3u + 18u + 2u * 20u + 1u + 6u + 6u);
+  ASSERT_EQ(h.size(), 3u + 18u + 2u * 20u + 2u + 6u + 6u);
   ASSERT_EQ(r.size(), h.size());
   auto col = [&](const std::string& name) {
     for (std::size_t i = 0; i < h.size(); ++i)
@@ -1175,7 +1194,7 @@ TEST(TraceCsv, PlanarRowsMatchTheHeader) {
   std::getline(in, header);
   std::getline(in, line);
   const std::vector<std::string> h = split(header), r = split(line);
-  ASSERT_EQ(h.size(), 3u + 9u + 2u * 16u + 1u + 3u + 3u);
+  ASSERT_EQ(h.size(), 3u + 9u + 2u * 16u + 2u + 3u + 3u);
   ASSERT_EQ(r.size(), h.size());
   EXPECT_EQ(h[3], "des_x");
   EXPECT_EQ(h[5], "des_angle");

@@ -99,6 +99,10 @@ struct SensorNoise {
   double normal_force_std = 0.0;
   /// Constant bias [N] added to the measured normal force.
   double normal_force_bias = 0.0;
+  /// Relative gain error of the force sensor: the reading is (1 + gain_error) f_n.
+  double normal_force_gain_error = 0.0;
+  /// Std of Gaussian noise relative to the force: adds N(0, (rel_std f_n)^2) [N].
+  double normal_force_relative_std = 0.0;
   /// Std [m] per world axis of Gaussian noise added to the contact point.
   double contact_point_std = 0.0;
   /// Std [rad] of the rotation of the measured normal about each of the two tangent
@@ -123,6 +127,11 @@ struct PlantParams {
   /// First-order lag time constant [s] between commanded and actual joint velocity;
   /// 0 = none (the actual velocity equals the clamped command).
   double joint_velocity_lag = 0.0;
+  /// Actuator transport delay, in commands: a joint-velocity command takes effect when
+  /// `command_delay` further commands have been given (one per control period: 1 is
+  /// one tick of delay, as a hand's bus and servo loop add). 0 = at once; at most 8.
+  int command_delay = 0;
+  static constexpr int kMaxCommandDelay = 8;
   SensorNoise sensing{};
   /// Seed of the sensing noise generator.
   std::uint64_t seed = 1;
@@ -155,6 +164,12 @@ struct PlantParams {
         return Validation::invalid(names[i], "must be finite and >= 0");
     if (!is_finite(s.normal_force_bias))
       return Validation::invalid("sensing.normal_force_bias", "must be finite");
+    if (!is_finite(s.normal_force_gain_error) || !(s.normal_force_gain_error > -1.0))
+      return Validation::invalid("sensing.normal_force_gain_error", "must be finite and > -1");
+    if (!is_finite(s.normal_force_relative_std) || !(s.normal_force_relative_std >= 0.0))
+      return Validation::invalid("sensing.normal_force_relative_std", "must be finite and >= 0");
+    if (command_delay < 0 || command_delay > kMaxCommandDelay)
+      return Validation::invalid("command_delay", "must be in [0, 8] commands");
     return Validation::valid();
   }
 };
@@ -391,7 +406,8 @@ class HandPlant {
     Finger& f = fingers_[static_cast<std::size_t>(i)];
     const int n = f.chain.dof();
     if (qd.size() != n || !all_finite(qd)) {
-      f.qd_cmd.setZero();
+      f.pending[static_cast<std::size_t>(f.pending_head)].setZero();
+      apply_delayed(f);
       ++f.counters.invalid_commands;
       return false;
     }
@@ -402,11 +418,25 @@ class HandPlant {
         v = v > lim ? lim : -lim;
         ++f.counters.velocity_clamped;
       }
-      f.qd_cmd(j) = v;
+      f.pending[static_cast<std::size_t>(f.pending_head)](j) = v;
     }
+    apply_delayed(f);
     return true;
   }
   const FingerCounters& counters(int i) const noexcept { return at(i).counters; }
+
+ private:
+  /// The command written at pending_head goes in the ring; the one given
+  /// command_delay commands ago takes effect.
+  template <typename FingerState>  // Finger, declared below
+  void apply_delayed(FingerState& f) const noexcept {
+    constexpr int kRing = PlantParams::kMaxCommandDelay + 1;
+    const int d = params_.command_delay;
+    f.qd_cmd = f.pending[static_cast<std::size_t>((f.pending_head - d + kRing) % kRing)];
+    f.pending_head = (f.pending_head + 1) % kRing;
+  }
+
+ public:
   /// World pose of finger i's fingertip frame (origin = fingertip sphere centre).
   const Pose<double, 3>& fingertip_pose(int i) const noexcept { return at(i).ws.fingertip; }
   /// Forward-kinematics workspace of finger i at the current joint angles.
@@ -526,6 +556,8 @@ class HandPlant {
     const SensorNoise& s = params_.sensing;
     for (auto& f : fingers_) {
       f.force_noise = s.normal_force_std * noise_.normal();
+      // Drawn only when used, so the other sequences do not move with the option.
+      f.force_noise_unit = s.normal_force_relative_std > 0.0 ? noise_.normal() : 0.0;
       f.point_noise = s.contact_point_std * noise_.normal3();
       f.normal_noise = s.normal_angle_std * noise_.normal3();
     }
@@ -533,15 +565,18 @@ class HandPlant {
     pose_rotation_noise_ = s.object_rotation_std * noise_.normal3();
   }
   /// Tactile reading of finger i: truth now, corrupted by the last sampled noise:
-  /// force = max(0, f_n + bias + noise); point += noise; the normal is rotated by
-  /// exp(w) with w the tangential part of the sampled 3-vector (std per axis).
+  /// force = max(0, (1 + gain_error) f_n + bias + noise + relative noise); point += noise; the
+  /// normal is rotated by exp(w) with w the tangential part of the sampled 3-vector (std per axis).
   TactileReading tactile(int i) const noexcept {
     const Finger& f = at(i);
     TactileReading r;
     r.contact_point = f.ws.fingertip.position;
     if (!f.contact.active) return r;
-    const double force =
-        std::max(0.0, f.contact.normal_force + params_.sensing.normal_force_bias + f.force_noise);
+    const SensorNoise& sn = params_.sensing;
+    const double force = std::max(
+        0.0, (1.0 + sn.normal_force_gain_error) * f.contact.normal_force + sn.normal_force_bias +
+                 f.force_noise +
+                 sn.normal_force_relative_std * f.contact.normal_force * f.force_noise_unit);
     if (!(force > params_.sensing.touch_threshold)) return r;
     r.touching = true;
     r.normal_force = force;
@@ -589,6 +624,7 @@ class HandPlant {
           sin_dq(JointVector::Zero(chain.dof())),
           cos_dq(JointVector::Ones(chain.dof())),
           trig_qd(JointVector::Zero(chain.dof())) {
+      for (JointVector& p : pending) p = JointVector::Zero(chain.dof());
       for (int j = 0; j < chain.dof(); ++j) {
         const auto& jd = chain.joints[j];
         JointConstants& jc = constants[static_cast<std::size_t>(j)];
@@ -624,6 +660,10 @@ class HandPlant {
     ContactState contact{};
     FingerCounters counters{};
     double force_noise = 0.0;
+    double force_noise_unit = 0.0;  ///< N(0, 1) draw of the relative force noise
+    /// Commands not yet in effect (ring buffer; see PlantParams::command_delay).
+    std::array<JointVector, PlantParams::kMaxCommandDelay + 1> pending{};
+    int pending_head = 0;
     Eigen::Vector3d point_noise = Eigen::Vector3d::Zero();
     Eigen::Vector3d normal_noise = Eigen::Vector3d::Zero();
   };

@@ -42,7 +42,7 @@ struct StageSpec {
   double duration = 1.0;
   bool release = false;  ///< hold: unfreeze the object when the stage starts
   std::vector<TrajectorySegment<double, 3>> segments;  ///< manipulate
-  double settle = 0.5;   ///< manipulate: hold time after the last segment [s]
+  double settle = 0.5;  ///< manipulate: hold time after the last segment [s]
 };
 
 /// A fault injected into a run (method robustness: sensing faults and disturbances).
@@ -57,19 +57,24 @@ struct FaultSpec {
   enum class Kind { tactile_dropout, force_spike, pose_outlier, knock, finger_away };
   Kind kind = Kind::tactile_dropout;
   std::string stage = "manipulate";
-  double at = 0.5;        ///< s into the stage
-  double duration = 0.05; ///< s
+  double at = 0.5;         ///< s into the stage
+  double duration = 0.05;  ///< s
   int finger = 0;
   double magnitude = 0.0;
   Eigen::Vector3d vector = Eigen::Vector3d::Zero();
 };
 inline const char* to_string(FaultSpec::Kind k) noexcept {
   switch (k) {
-    case FaultSpec::Kind::tactile_dropout: return "tactile_dropout";
-    case FaultSpec::Kind::force_spike: return "force_spike";
-    case FaultSpec::Kind::pose_outlier: return "pose_outlier";
-    case FaultSpec::Kind::knock: return "knock";
-    case FaultSpec::Kind::finger_away: return "finger_away";
+    case FaultSpec::Kind::tactile_dropout:
+      return "tactile_dropout";
+    case FaultSpec::Kind::force_spike:
+      return "force_spike";
+    case FaultSpec::Kind::pose_outlier:
+      return "pose_outlier";
+    case FaultSpec::Kind::knock:
+      return "knock";
+    case FaultSpec::Kind::finger_away:
+      return "finger_away";
   }
   return "unknown";
 }
@@ -161,7 +166,8 @@ class ScenarioRunner {
     HandController controller;
     const HandController::Config cfg = controller_config_for(spec.hand, spec.controller);
     const Validation v = controller.configure(cfg);
-    if (!v.ok()) throw std::invalid_argument(std::string("controller: ") + v.field + ": " + v.reason);
+    if (!v.ok())
+      throw std::invalid_argument(std::string("controller: ") + v.field + ": " + v.reason);
     const double dt = cfg.control_period;
     HandController::Input in = controller.make_input();
     HandController::Output out = controller.make_output();
@@ -176,7 +182,8 @@ class ScenarioRunner {
         ft.touching = plant.contact(i).active;
         ft.normal_force = plant.contact(i).normal_force;
         ft.slip_distance = plant.contact(i).slip_distance;
-        ft.desired_force = out.fingers[static_cast<std::size_t>(i)].desired_normal_force;
+        ft.desired_force = out.fingers[static_cast<std::size_t>(i)]
+                               .force_target;  // what the force loop drives to (force_layer.hpp)
       }
     };
     read_truth();
@@ -191,8 +198,10 @@ class ScenarioRunner {
     result.faults.resize(spec.faults.size());
     for (std::size_t fi = 0; fi < spec.faults.size(); ++fi) {
       const FaultSpec& fs = spec.faults[fi];
-      if (fs.finger < 0 || fs.finger >= n) throw std::invalid_argument("fault: finger index out of range");
-      if (!(fs.duration >= 0.0) || !(fs.at >= 0.0)) throw std::invalid_argument("fault: negative time");
+      if (fs.finger < 0 || fs.finger >= n)
+        throw std::invalid_argument("fault: finger index out of range");
+      if (!(fs.duration >= 0.0) || !(fs.at >= 0.0))
+        throw std::invalid_argument("fault: negative time");
       result.faults[fi].kind = fs.kind;
       result.faults[fi].finger = fs.finger;
     }
@@ -215,7 +224,8 @@ class ScenarioRunner {
         } else {
           stage_duration = st.settle;
           for (const auto& seg : st.segments) {
-            if (!traj.append(seg)) throw std::invalid_argument("invalid trajectory segment in " + st.name);
+            if (!traj.append(seg))
+              throw std::invalid_argument("invalid trajectory segment in " + st.name);
             stage_duration += seg.duration;
           }
         }
@@ -253,13 +263,20 @@ class ScenarioRunner {
           if (fs.stage != st.name || ts + 1e-12 < fs.at || ts >= fs.at + fs.duration) continue;
           auto& finger_in = in.fingers[static_cast<std::size_t>(fs.finger)];
           switch (fs.kind) {
-            case FaultSpec::Kind::tactile_dropout: finger_in.contact.touching = false; break;
+            case FaultSpec::Kind::tactile_dropout:
+              finger_in.contact.touching = false;
+              break;
             case FaultSpec::Kind::force_spike:
               if (finger_in.contact.touching) finger_in.contact.normal_force += fs.magnitude;
               break;
-            case FaultSpec::Kind::pose_outlier: in.object_pose.position += fs.vector; break;
-            case FaultSpec::Kind::knock: knock_force += fs.vector; break;
-            case FaultSpec::Kind::finger_away: break;
+            case FaultSpec::Kind::pose_outlier:
+              in.object_pose.position += fs.vector;
+              break;
+            case FaultSpec::Kind::knock:
+              knock_force += fs.vector;
+              break;
+            case FaultSpec::Kind::finger_away:
+              break;
           }
           if (fault_state[fi].start_tick < 0) {
             fault_state[fi].start_tick = global_tick;
@@ -269,18 +286,22 @@ class ScenarioRunner {
         plant.set_external_wrench(knock_force, Eigen::Vector3d::Zero());
         const ControllerStatus status = controller.update(in, out);
         for (int i = 0; i < n; ++i)
-          plant.set_joint_velocity_command(i, out.fingers[static_cast<std::size_t>(i)].joint_velocities);
+          plant.set_joint_velocity_command(
+              i, out.fingers[static_cast<std::size_t>(i)].joint_velocities);
         for (std::size_t fi = 0; fi < spec.faults.size(); ++fi) {
           const FaultSpec& fs = spec.faults[fi];
           FaultTracking& ft = fault_state[fi];
           FaultReport& fr = result.faults[fi];
           if (ft.start_tick < 0) continue;
-          const bool active = fs.stage == st.name && ts + 1e-12 >= fs.at && ts < fs.at + fs.duration;
-          if (fs.kind == FaultSpec::Kind::finger_away && (active || fs.duration <= 0.0 || ft.away)) {
+          const bool active =
+              fs.stage == st.name && ts + 1e-12 >= fs.at && ts < fs.at + fs.duration;
+          if (fs.kind == FaultSpec::Kind::finger_away &&
+              (active || fs.duration <= 0.0 || ft.away)) {
             ft.away = true;  // stays away for the rest of the run
             const int f = fs.finger;
-            PlantFinger::JointVector qd = 5.0 * (spec.hand.open_configuration[static_cast<std::size_t>(f)] -
-                                                 plant.joint_positions(f));
+            PlantFinger::JointVector qd =
+                5.0 * (spec.hand.open_configuration[static_cast<std::size_t>(f)] -
+                       plant.joint_positions(f));
             plant.set_joint_velocity_command(f, qd);
           }
           bool reported = false;
@@ -292,9 +313,12 @@ class ScenarioRunner {
               reported = has(out.warnings, ControllerWarning::force_outlier);
               break;
             case FaultSpec::Kind::tactile_dropout:
-              reported = out.fingers[static_cast<std::size_t>(fs.finger)].state == FingerState::reacquiring;
+              reported = out.fingers[static_cast<std::size_t>(fs.finger)].state ==
+                         FingerState::reacquiring;
               break;
-            default: reported = status == ControllerStatus::contact_lost; break;
+            default:
+              reported = status == ControllerStatus::contact_lost;
+              break;
           }
           if (reported && fr.detection_ticks < 0) fr.detection_ticks = global_tick - ft.start_tick;
           if (!active && !ft.window_over) {
@@ -388,8 +412,10 @@ inline ScenarioSpec paper_scenario(PaperObject object, PaperTask task, int axis,
   manip.kind = StageSpec::Kind::manipulate;
   manip.settle = 1.0;
   Twist<double, 3> d = Twist<double, 3>::Zero();
-  if (task == PaperTask::translate) d(axis) = 0.005;
-  else d(3 + axis) = -0.2;
+  if (task == PaperTask::translate)
+    d(axis) = 0.005;
+  else
+    d(3 + axis) = -0.2;
   manip.segments.push_back(TrajectorySegment<double, 3>::reciprocate(d, cycle_duration, 1));
   s.stages = {grasp, hold, manip};
   return s;
