@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "common/expectations.hpp"
+#include "common/force_layer_summary.hpp"
 #include "common/summary_json.hpp"
 #include "common/trace_csv.hpp"
 #include "scenario_json.hpp"
@@ -167,9 +168,32 @@ int print_summary_table(const std::vector<std::string>& files, bool check) {
   return failed > 0 && check ? kExitViolation : 0;
 }
 
-/// The common summary plus, when faults were injected, what the controller made of them.
-ex::Json summary_document(const ex::RunSummary& summary, const ip::ScenarioResult& result) {
+/// The common summary plus, per stage, the force layer's record (force_layer_summary.hpp)
+/// and, when faults were injected, what the controller made of them.
+ex::Json summary_document(const ex::RunSummary& summary, const ip::ScenarioResult& result,
+                          const ex::ForceLayerSummaryAccumulator<3>& force_layer) {
   ex::Json j = ex::summary_json(summary);
+  ex::Json fl = ex::Json::array();
+  auto vec = [](const auto& v) {
+    ex::Json a = ex::Json::array();
+    for (int k = 0; k < v.size(); ++k) a.push_back(v(k));
+    return a;
+  };
+  auto drift = [](double d) { return d < 0.0 ? ex::Json(nullptr) : ex::Json(d); };
+  for (const ex::ForceLayerStageSummary<3>& s : force_layer.stages()) {
+    fl.push_back({{"stage", s.stage},
+                  {"max_grip", s.max_grip},
+                  {"final_grip", s.final_grip},
+                  {"slip_ticks", s.slip_ticks},
+                  {"beyond_capacity_ticks", s.beyond_capacity_ticks},
+                  {"first_beyond_capacity", drift(s.first_beyond_capacity)},
+                  {"max_abs_force_integral", s.max_abs_force_integral},
+                  {"final_load", vec(s.final_load)},
+                  {"final_pose_integral", vec(s.final_pose_integral)},
+                  {"force_integral_drift", drift(s.force_integral_drift)},
+                  {"pose_integral_drift", drift(s.pose_integral_drift)}});
+  }
+  j["force_layer"] = fl;
   if (!result.faults.empty()) {
     ex::Json faults = ex::Json::array();
     for (const ip::FaultReport& f : result.faults) {
@@ -319,12 +343,16 @@ int run_scenario(const Options& o) {
   summary.finger_names = spec.hand.finger_names;
   summary.expectations_checked = !sf.expect.empty();
   ip::ScenarioResult result;
+  ex::ForceLayerSummaryAccumulator<3> force_layer;
   const auto wall0 = std::chrono::steady_clock::now();
   try {
     ex::TraceRow<3> row;
-    ip::ScenarioRunner::TickObserver observer;
-    if (trace) {
-      observer = [&](const ip::TickRecord& rec) {
+    std::vector<double> stage_start(spec.stages.size(), -1.0);
+    ip::ScenarioRunner::TickObserver observer = [&](const ip::TickRecord& rec) {
+      const std::size_t si = static_cast<std::size_t>(rec.stage);
+      if (stage_start[si] < 0.0) stage_start[si] = rec.time;
+      force_layer.add(rec.stage, spec.stages[si].name, rec.time - stage_start[si], *rec.output);
+      if (trace) {
         row.time = rec.time;
         row.stage = rec.stage;
         row.stage_name = spec.stages[static_cast<std::size_t>(rec.stage)].name;
@@ -334,8 +362,8 @@ int run_scenario(const Options& o) {
         ex::fill_trace_fingers<3>(*rec.input, *rec.output, row.fingers);
         ex::fill_trace_hand<3>(*rec.output, row);
         trace->write(row);
-      };
-    }
+      }
+    };
     result = ip::ScenarioRunner().run(spec, observer);
   } catch (const std::invalid_argument& e) {
     return fail(kExitBadInput, o.files.front() + ": invalid scenario: " + e.what());
@@ -351,7 +379,8 @@ int run_scenario(const Options& o) {
   for (std::string& v : ex::check_fault_expectations(sf.fault_expect, result.faults))
     summary.violations.push_back(std::move(v));
   try {
-    if (summary_file) summary_file->write(summary_document(summary, result).dump(2) + "\n");
+    if (summary_file)
+      summary_file->write(summary_document(summary, result, force_layer).dump(2) + "\n");
     ex::commit_together({trace ? &trace->file() : nullptr, summary_file.get()});
   } catch (const std::exception& e) {
     return fail(kExitRuntime, e.what());

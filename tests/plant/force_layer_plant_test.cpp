@@ -1,0 +1,134 @@
+// Closed-loop properties of the force layer on the analytic plant (docs/force_layer.md):
+// one equilibrium (no integrator ramps over a long hold), and the grip following a
+// load added mid-task; and the plant's actuator delay and force-sensor errors that
+// the force-layer scenarios use.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "inhand/plant/scenario.hpp"
+
+namespace {
+
+namespace ip = inhand::plant;
+using inhand::ControllerWarning;
+
+/// Per tick of one stage: the largest |force integral| over fingers and the norm of
+/// the pose-error integral.
+struct IntegratorTrace {
+  std::vector<double> time, force, pose;
+};
+
+TEST(HoldOn, NoIntegratorRampsOverALongHoldUnderGravity) {
+  ip::ScenarioSpec spec =
+      ip::paper_scenario(ip::PaperObject::cylinder, ip::PaperTask::translate, 0);
+  spec.stages.resize(2);  // grasp, then release and hold
+  spec.stages[1].duration = 120.0;
+  IntegratorTrace tr;
+  const ip::ScenarioResult r = ip::ScenarioRunner().run(spec, [&](const ip::TickRecord& rec) {
+    if (rec.stage != 1) return;
+    double f = 0.0;
+    for (const auto& fo : rec.output->fingers) f = std::max(f, std::abs(fo.force_integral));
+    tr.time.push_back(rec.time);
+    tr.force.push_back(f);
+    tr.pose.push_back(rec.output->pose_error_integral.norm());
+  });
+  ASSERT_EQ(r.stages.size(), 2u);
+  const ip::StageMetrics& hold = r.stages[1];
+  EXPECT_FALSE(hold.dropped);
+  EXPECT_EQ(hold.contact_losses, 0);
+  EXPECT_LT(hold.final_position_error, 1e-4);
+  // After the first 10 s, neither integrator moves: compare 10 s with the end.
+  ASSERT_GT(tr.time.size(), 100000u);
+  const double t0 = tr.time.front();
+  std::size_t k10 = 0;
+  while (tr.time[k10] < t0 + 10.0) ++k10;
+  double force_change = 0.0, pose_change = 0.0;
+  for (std::size_t k = k10; k < tr.time.size(); ++k) {
+    force_change = std::max(force_change, std::abs(tr.force[k] - tr.force[k10]));
+    pose_change = std::max(pose_change, std::abs(tr.pose[k] - tr.pose[k10]));
+  }
+  // 1e-6 N s and 1e-7 m s over 110 s: flat (a ramp of the paper's loops moved the
+  // thumb's parts by 0.38 mm/s per second).
+  EXPECT_LT(force_change, 1e-6);
+  EXPECT_LT(pose_change, 1e-7);
+  ::testing::Test::RecordProperty("force_integral_change_after_10s_Ns",
+                                  std::to_string(force_change));
+  ::testing::Test::RecordProperty("pose_integral_change_after_10s_ms", std::to_string(pose_change));
+}
+
+TEST(HoldOn, LoadAddedMidTaskRaisesTheGripWithoutADrop) {
+  ip::ScenarioSpec spec =
+      ip::paper_scenario(ip::PaperObject::cylinder, ip::PaperTask::translate, 0);
+  spec.plant.contact.friction = 0.25;
+  ip::FaultSpec push;  // twice the weight, held 2 s
+  push.kind = ip::FaultSpec::Kind::knock;
+  push.stage = spec.stages[2].name;
+  push.at = 1.0;
+  push.duration = 2.0;
+  push.vector = Eigen::Vector3d(0.0, 0.0, -2.0 * spec.object.mass * 9.81);
+  spec.faults.push_back(push);
+  double grip_before = 0.0, grip_max = 0.0;
+  long slip_ticks = 0;
+  const ip::ScenarioResult r = ip::ScenarioRunner().run(spec, [&](const ip::TickRecord& rec) {
+    if (rec.stage != 2) return;
+    if (rec.output->manipulation_time < 1.0) grip_before = std::max(grip_before, rec.output->grip);
+    grip_max = std::max(grip_max, rec.output->grip);
+    if (inhand::has(rec.output->warnings, ControllerWarning::slipping)) ++slip_ticks;
+  });
+  ASSERT_EQ(r.stages.size(), 3u);
+  EXPECT_FALSE(r.stages[2].dropped);
+  EXPECT_EQ(r.stages[2].contact_losses, 0);
+  EXPECT_GT(slip_ticks, 0);
+  EXPECT_GT(grip_max, grip_before + 0.3);
+  EXPECT_LT(r.stages[2].rms_position_error, 5e-4);
+  ::testing::Test::RecordProperty("grip_max", std::to_string(grip_max));
+  ::testing::Test::RecordProperty("slip_ticks", std::to_string(slip_ticks));
+}
+
+TEST(PlantActuator, CommandDelayIsWholeCommands) {
+  const ip::HandPreset hand = ip::three_finger_hand();
+  for (int delay : {0, 1, 3}) {
+    ip::PlantParams p = ip::default_plant_params();
+    p.command_delay = delay;
+    ip::HandPlant plant(hand.fingers, ip::paper_cylinder(hand), p);
+    const int dof = hand.fingers[0].dof();
+    for (int k = 0; k < 8; ++k) {
+      ip::PlantFinger::JointVector qd = ip::PlantFinger::JointVector::Constant(dof, 0.01 * (k + 1));
+      ASSERT_TRUE(plant.set_joint_velocity_command(0, qd));
+      plant.step(1e-3);
+      // In effect now: the command given `delay` commands ago (zero before the first).
+      const double want = k - delay >= 0 ? 0.01 * (k - delay + 1) : 0.0;
+      EXPECT_NEAR(plant.joint_velocities(0)(0), want, 1e-12)
+          << "delay " << delay << " command " << k;
+    }
+  }
+  ip::PlantParams bad = ip::default_plant_params();
+  bad.command_delay = ip::PlantParams::kMaxCommandDelay + 1;
+  EXPECT_STREQ(bad.validate().field, "command_delay");
+}
+
+TEST(PlantSensing, GainErrorScalesTheReading) {
+  ip::ScenarioSpec spec = ip::paper_scenario(ip::PaperObject::cylinder, ip::PaperTask::translate, 0);
+  spec.plant.sensing.normal_force_gain_error = 0.1;
+  long checked = 0;
+  double worst = 0.0;
+  ip::ScenarioRunner().run(spec, [&](const ip::TickRecord& rec) {
+    for (std::size_t i = 0; i < rec.input->fingers.size(); ++i) {
+      const auto& c = rec.input->fingers[i].contact;
+      // The plant's reading now against its truth now (no noise: exact).
+      if (!c.touching) continue;
+      const double truth = rec.plant->contact(static_cast<int>(i)).normal_force;
+      const ip::TactileReading now = rec.plant->tactile(static_cast<int>(i));
+      if (!now.touching) continue;
+      worst = std::max(worst, std::abs(now.normal_force - 1.1 * truth));
+      ++checked;
+    }
+  });
+  EXPECT_GT(checked, 1000);
+  EXPECT_LT(worst, 1e-12);
+}
+
+}  // namespace
