@@ -111,7 +111,8 @@ TEST(PlantActuator, CommandDelayIsWholeCommands) {
 }
 
 TEST(PlantSensing, GainErrorScalesTheReading) {
-  ip::ScenarioSpec spec = ip::paper_scenario(ip::PaperObject::cylinder, ip::PaperTask::translate, 0);
+  ip::ScenarioSpec spec =
+      ip::paper_scenario(ip::PaperObject::cylinder, ip::PaperTask::translate, 0);
   spec.plant.sensing.normal_force_gain_error = 0.1;
   long checked = 0;
   double worst = 0.0;
@@ -129,6 +130,76 @@ TEST(PlantSensing, GainErrorScalesTheReading) {
   });
   EXPECT_GT(checked, 1000);
   EXPECT_LT(worst, 1e-12);
+}
+
+/// Three fingers of the three-finger preset's geometry set at 0, 120 and 240 degrees
+/// about the world Z axis: a tripod whose contact normals on a sphere are 120 degrees
+/// apart, far from collinear (the paper's planner cannot balance them; the force layer's
+/// projection does not need them collinear).
+ip::HandPreset tripod_hand() {
+  const ip::HandPreset one = ip::three_finger_hand();
+  ip::HandPreset p = one;
+  p.name = "tripod";
+  p.fingers.clear();
+  p.finger_names = {"a", "b", "c"};
+  p.open_configuration.clear();
+  p.grasp_configuration.clear();
+  p.approach_directions.clear();
+  p.approach_points.clear();
+  p.opposing_pairs.clear();
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Matrix3d rz =
+        Eigen::AngleAxisd(2.0 * 3.14159265358979323846 * k / 3.0, Eigen::Vector3d::UnitZ())
+            .toRotationMatrix();
+    ip::PlantFinger f = one.fingers[2];  // the thumb: base at -y, approaching along -y
+    f.base.position = rz * Eigen::Vector3d(0.0, f.base.position.y(), f.base.position.z());
+    f.base.rotation = rz * f.base.rotation;
+    p.fingers.push_back(f);
+    p.open_configuration.push_back(one.open_configuration[2]);
+    p.grasp_configuration.push_back(one.grasp_configuration[2]);
+    p.approach_directions.push_back(rz * one.approach_directions[2]);
+    p.approach_points.push_back(Eigen::Vector3d::Zero());
+  }
+  p.thumb = 0;
+  return p;
+}
+
+TEST(HoldOn, TripodOnASphereHasNonCollinearNormalsAndPassesThePaperTasks) {
+  int passed = 0, runs = 0;
+  double worst_cos = -1.0;
+  for (int task = 0; task < 2; ++task) {
+    for (int axis = 0; axis < 3; ++axis) {
+      ip::ScenarioSpec spec =
+          ip::paper_scenario(ip::PaperObject::cylinder,
+                             task == 0 ? ip::PaperTask::translate : ip::PaperTask::rotate, axis);
+      spec.hand = tripod_hand();
+      spec.object.shape = ip::ObjectShape::sphere(0.020);
+      spec.object.pose = spec.hand.object_pose;
+      double min_cos = 1.0;  // smallest cosine between two measured normals after the grasp
+      const ip::ScenarioResult r = ip::ScenarioRunner().run(spec, [&](const ip::TickRecord& rec) {
+        if (rec.stage != 2) return;
+        const auto& f = rec.input->fingers;
+        for (std::size_t a = 0; a < f.size(); ++a)
+          for (std::size_t b = a + 1; b < f.size(); ++b)
+            if (f[a].contact.touching && f[b].contact.touching)
+              min_cos = std::min(min_cos, f[a].contact.normal.dot(f[b].contact.normal));
+      });
+      ++runs;
+      worst_cos = std::max(worst_cos, min_cos);
+      ASSERT_EQ(r.stages.size(), 3u) << r.failure;
+      const ip::StageMetrics& m = r.stages[2];
+      const bool ok = !m.dropped && m.contact_losses == 0 && m.rms_position_error <= 5e-4 &&
+                      m.rms_orientation_error <= 1e-2;
+      EXPECT_TRUE(ok) << "task " << task << " axis " << axis << ": rms " << m.rms_position_error
+                      << " m, " << m.rms_orientation_error << " rad";
+      passed += ok ? 1 : 0;
+    }
+  }
+  // Normals 120 degrees apart: cos = -0.5, far from the collinear -1.
+  EXPECT_LT(worst_cos, -0.3);
+  EXPECT_GT(worst_cos, -0.8);
+  ::testing::Test::RecordProperty("tripod_sphere_passed",
+                                  std::to_string(passed) + "/" + std::to_string(runs));
 }
 
 }  // namespace
