@@ -18,9 +18,10 @@
 // controller's state evolves; the edits make them hostile.
 // Properties (each violation executes __builtin_trap(), which libFuzzer reports as a
 // crash with the reproducing input): every joint velocity command finite and |qdot_i|
-// <= max_velocity_i; an invalid_input tick commands exactly zero. (The diagnostic
-// outputs, e.g. the commanded twist, may overflow for absurd finite inputs such as an
-// object 1e308 m away; the command stays finite and bounded.) update()
+// <= max_velocity_i; an invalid_input or numerical_fault tick commands exactly zero;
+// every floating-point member of the Output is finite, diagnostics included (an absurd
+// finite input such as an object 1e308 m away gives numerical_fault, which names the
+// stage). update()
 // is noexcept (static_assert): an exception escaping it would terminate the process,
 // which libFuzzer also reports; configure/start calls outside update() are wrapped and
 // trap on any exception.
@@ -188,9 +189,27 @@ void check(const Ctrl& ctl, inhand::ControllerStatus status, const Ctrl::Output&
     for (int j = 0; j < qd.size(); ++j) {
       const double v = qd(j);
       if (!std::isfinite(v) || !(std::abs(v) <= chain.joints[j].max_velocity)) __builtin_trap();
-      if (status == inhand::ControllerStatus::invalid_input && v != 0.0) __builtin_trap();
+      if ((status == inhand::ControllerStatus::invalid_input ||
+           status == inhand::ControllerStatus::numerical_fault) &&
+          v != 0.0)
+        __builtin_trap();
     }
+    const auto& f = out.fingers[static_cast<std::size_t>(i)];
+    if (!inhand::all_finite(f.desired_contact_velocity) || !inhand::all_finite(f.servo.total) ||
+        !inhand::all_finite(f.servo.force) || !inhand::all_finite(f.servo.motion) ||
+        !std::isfinite(f.desired_normal_force) || !std::isfinite(f.force_target) ||
+        !std::isfinite(f.stiffness_estimate) || !std::isfinite(f.force_integral))
+      __builtin_trap();
   }
+  // Nothing non-finite leaves update(), diagnostics included.
+  if (!out.desired_object_pose.is_finite() || !inhand::all_finite(out.feedforward_twist) ||
+      !inhand::all_finite(out.commanded_twist) || !inhand::all_finite(out.pose_error) ||
+      !inhand::all_finite(out.pose_error_integral) || !inhand::all_finite(out.force_residual) ||
+      !inhand::all_finite(out.load_estimate) || !std::isfinite(out.grip) ||
+      !std::isfinite(out.manipulation_time) || !std::isfinite(out.dt))
+    __builtin_trap();
+  if ((status == inhand::ControllerStatus::numerical_fault) != (out.numerical_fault != nullptr))
+    __builtin_trap();
 }
 
 }  // namespace

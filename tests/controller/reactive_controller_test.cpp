@@ -541,11 +541,31 @@ TEST(ReactiveControllerConfig, ValidateNamesTheOffendingField) {
       {"zero speed bound", [](PlanarCtrl::Config& c) { c.pose_feedback.max_linear_speed = 0.0; },
        "pose_feedback.max_linear_speed", -1, -1},
       {"negative motion kp", [](PlanarCtrl::Config& c) { c.servo.motion.kp = -1.0; },
-       "servo.motion", -1, -1},
-      {"negative force ki", [](PlanarCtrl::Config& c) { c.servo.force.ki = -0.1; }, "servo.force",
-       -1, -1},
-      {"bad damping", [](PlanarCtrl::Config& c) { c.ik.damping.singular_threshold = 0.0; },
-       "ik.damping", -1, -1},
+       "servo.motion.kp", -1, -1},
+      {"negative force ki", [](PlanarCtrl::Config& c) { c.servo.force.ki = -0.1; },
+       "servo.force.ki", -1, -1},
+      {"zero force integral limit",
+       [](PlanarCtrl::Config& c) { c.servo.force.integral_limit = 0.0; },
+       "servo.force.integral_limit", -1, -1},
+      {"NaN motion output limit", [](PlanarCtrl::Config& c) { c.servo.motion.output_limit = kNaN; },
+       "servo.motion.output_limit", -1, -1},
+      {"zero servo integral velocity",
+       [](PlanarCtrl::Config& c) { c.servo.max_integral_velocity = 0.0; },
+       "servo.max_integral_velocity", -1, -1},
+      {"bad damping threshold",
+       [](PlanarCtrl::Config& c) { c.ik.damping.singular_threshold = 0.0; },
+       "ik.damping.singular_threshold", -1, -1},
+      {"negative max damping", [](PlanarCtrl::Config& c) { c.ik.damping.max_damping = -1.0; },
+       "ik.damping.max_damping", -1, -1},
+      {"infinite force plausibility bound",
+       [](PlanarCtrl::Config& c) { c.max_measured_force = kInf; }, "max_measured_force", -1, -1},
+      {"zero contact tolerance", [](PlanarCtrl::Config& c) { c.contact_tolerance = 0.0; },
+       "contact_tolerance", -1, -1},
+      {"NaN start tolerance", [](PlanarCtrl::Config& c) { c.start_position_tolerance = kNaN; },
+       "start_position_tolerance", -1, -1},
+      {"infinite pose integral limit",
+       [](PlanarCtrl::Config& c) { c.pose_feedback.position_integral_limit = kInf; },
+       "pose_feedback.position_integral_limit", -1, -1},
       {"min force above max",
        [](PlanarCtrl::Config& c) {
          c.force_planner.min_force = 3.0;
@@ -558,12 +578,30 @@ TEST(ReactiveControllerConfig, ValidateNamesTheOffendingField) {
        "fingers.role", -1, -1},
       {"finger 2 zero joint speed",
        [](PlanarCtrl::Config& c) { c.fingers[2].chain.joints[1].max_velocity = 0.0; },
-       "joints.max_velocity", 2, 1},
+       "fingers.chain.joints.max_velocity", 2, 1},
       {"finger 2 tilted planar axis",
        [](PlanarCtrl::Config& c) { c.fingers[2].chain.joints[0].axis = V3::UnitX(); },
-       "joints.axis", 2, 0},
+       "fingers.chain.joints.axis", 2, 0},
       {"finger 1 NaN base",
-       [](PlanarCtrl::Config& c) { c.fingers[1].chain.base.position(0) = kNaN; }, "base", 1, -1},
+       [](PlanarCtrl::Config& c) { c.fingers[1].chain.base.position(0) = kNaN; },
+       "fingers.chain.base", 1, -1},
+      // Frames that are not rotations (finite, so only the rotation check sees them).
+      {"finger 1 base scaled by 2",
+       [](PlanarCtrl::Config& c) { c.fingers[1].chain.base.rotation *= 2.0; },
+       "fingers.chain.base.rotation", 1, -1},
+      {"finger 0 zero parent_to_joint of joint 2",
+       [](PlanarCtrl::Config& c) {
+         c.fingers[0].chain.joints[2].parent_to_joint.rotation.setZero();
+       },
+       "fingers.chain.joints.parent_to_joint.rotation", 0, 2},
+      {"finger 2 reflected joint_to_tip",
+       [](PlanarCtrl::Config& c) { c.fingers[2].chain.joint_to_tip.rotation(1, 1) = -1.0; },
+       "fingers.chain.joint_to_tip.rotation", 2, -1},
+      {"finger 2 slightly sheared parent_to_joint of joint 1",
+       [](PlanarCtrl::Config& c) {
+         c.fingers[2].chain.joints[1].parent_to_joint.rotation(0, 1) = 1e-4;
+       },
+       "fingers.chain.joints.parent_to_joint.rotation", 2, 1},
   };
   for (const Case& c : cases) {
     PlanarCtrl::Config cfg = scene.config;
@@ -1315,6 +1353,316 @@ TEST(ReactiveControllerMixedDof, ThumbWithFiveJointsAndFourJointFingers) {
   EXPECT_NEAR(rpy(0), -0.1, 1e-3);
   record("grasp_time_s", grasp_ticks * s.plant.dt);
   record("max_force_error_N", worst_force);
+}
+
+// ---------------------------------------------------------------------------
+// Hardening: malformed Inputs and Outputs, overflow, implausible geometry
+
+/// Every floating-point member of an Output is finite.
+template <typename Out>
+bool all_outputs_finite(const Out& out) {
+  using inhand::all_finite;
+  using inhand::is_finite;
+  bool ok = out.desired_object_pose.is_finite() && all_finite(out.feedforward_twist) &&
+            all_finite(out.commanded_twist) && all_finite(out.pose_error) &&
+            all_finite(out.force_residual) && all_finite(out.load_estimate) &&
+            all_finite(out.pose_error_integral) && is_finite(out.grip) &&
+            is_finite(out.manipulation_time);
+  for (const auto& f : out.fingers)
+    ok = ok && all_finite(f.joint_velocities) && all_finite(f.desired_contact_velocity) &&
+         is_finite(f.desired_normal_force) && is_finite(f.force_target) &&
+         all_finite(f.servo.total) && all_finite(f.servo.force) && all_finite(f.servo.motion) &&
+         is_finite(f.stiffness_estimate) && is_finite(f.force_integral);
+  return ok;
+}
+
+/// A planar hand (run-time finger count) that has grasped and is manipulating.
+struct DynRun {
+  Scene<PlanarDynCtrl> s = planar_scene<PlanarDynCtrl>();
+  PlanarDynCtrl c;
+  PlanarDynCtrl::Input in;
+  PlanarDynCtrl::Output out;
+};
+
+TEST(ReactiveControllerHardening, WrongFingerCountZeroesEveryOutputSlotAndNamesTheCount) {
+  DynRun r;
+  configure_and_grasp(r.c, r.s, r.in, r.out);
+  ASSERT_TRUE(r.c.start_manipulation(planar_task(r.s.plant.box.pose)).ok());
+  for (int k = 0; k < 50; ++k) ASSERT_EQ(tick(r.c, r.s.plant, r.in, r.out), ControllerStatus::ok);
+  bool moving = false;
+  for (const auto& f : r.out.fingers) moving = moving || !f.joint_velocities.isZero(0.0);
+  ASSERT_TRUE(moving) << "the scene must command motion before the bad tick";
+
+  // An Input with one finger too few: the last valid command must not survive.
+  PlanarDynCtrl::Input short_in = r.in;
+  short_in.fingers.pop_back();
+  short_in.time = r.in.time + 1e-3;
+  EXPECT_EQ(r.c.update(short_in, r.out), ControllerStatus::invalid_input);
+  EXPECT_EQ(r.out.fault.field, InputField::finger_count);
+  EXPECT_EQ(r.out.fault.finger, -1);
+  EXPECT_TRUE(zero_joint_velocities(r.c, r.out));
+  EXPECT_TRUE(r.out.commanded_twist.isZero(0.0));
+
+  // An Output with one finger too many: every slot it has is zeroed, none resized.
+  for (int k = 0; k < 5; ++k) ASSERT_EQ(tick(r.c, r.s.plant, r.in, r.out), ControllerStatus::ok);
+  PlanarDynCtrl::Output long_out = r.out;
+  long_out.fingers.push_back(long_out.fingers[0]);
+  for (auto& f : long_out.fingers) f.joint_velocities.setConstant(0.7);
+  r.s.plant.fill(r.in, true);
+  EXPECT_EQ(r.c.update(r.in, long_out), ControllerStatus::invalid_input);
+  EXPECT_EQ(long_out.fault.field, InputField::finger_count);
+  ASSERT_EQ(long_out.fingers.size(), 4u);
+  for (const auto& f : long_out.fingers) {
+    EXPECT_EQ(f.joint_velocities.size(), 3);
+    EXPECT_TRUE(f.joint_velocities.isZero(0.0));
+  }
+  EXPECT_STREQ(inhand::to_string(InputField::finger_count), "finger_count");
+}
+
+TEST(ReactiveControllerHardening, WronglySizedOutputIsRejectedNotResized) {
+  Scene<MixedCtrl> s = mixed_scene();
+  MixedCtrl c;
+  ASSERT_TRUE(c.configure(s.config).ok());
+  MixedCtrl::Input in = c.make_input();
+  MixedCtrl::Output out = c.make_output();
+  ASSERT_TRUE(c.start_grasp(s.targets).ok());
+  for (int k = 0; k < 10; ++k) ASSERT_EQ(tick(c, s.plant, in, out), ControllerStatus::grasping);
+  // Finger 1 has 4 joints; an Output not made by make_output() gives it 2.
+  MixedCtrl::Output bad = out;
+  bad.fingers[1].joint_velocities.setConstant(2, 0.5);
+  bad.fingers[0].joint_velocities.setConstant(0.5);
+  s.plant.fill(in, false);
+  EXPECT_EQ(c.update(in, bad), ControllerStatus::invalid_input);
+  EXPECT_EQ(bad.fault.field, InputField::output_joint_velocities);
+  EXPECT_EQ(bad.fault.finger, 1);
+  EXPECT_EQ(bad.fingers[1].joint_velocities.size(), 2) << "update() must not resize";
+  EXPECT_TRUE(bad.fingers[1].joint_velocities.isZero(0.0));
+  EXPECT_TRUE(bad.fingers[0].joint_velocities.isZero(0.0));
+  // A default-constructed Output (run-time DOF: empty vectors) is refused too.
+  MixedCtrl::Output empty;
+  EXPECT_EQ(c.update(in, empty), ControllerStatus::invalid_input);
+  EXPECT_EQ(empty.fault.field, InputField::output_joint_velocities);
+  EXPECT_EQ(empty.fault.finger, 0);
+  EXPECT_EQ(empty.fingers[0].joint_velocities.size(), 0);
+  // The state was frozen: the proper Output resumes.
+  EXPECT_EQ(c.update(in, out), ControllerStatus::grasping);
+}
+
+TEST(ReactiveControllerHardening, EnormousMeasuredForceIsInvalidInputAndNothingOverflows) {
+  Scene<PlanarCtrl> s = planar_scene<PlanarCtrl>();
+  PlanarCtrl c;
+  PlanarCtrl::Input in;
+  PlanarCtrl::Output out;
+  configure_and_grasp(c, s, in, out);
+  ASSERT_TRUE(c.start_manipulation(planar_task(s.plant.box.pose)).ok());
+  s.plant.object_moves = false;
+  for (int k = 0; k < 2000; ++k) {
+    s.plant.fill(in, true);
+    in.fingers[1].contact.normal_force = 1e308;  // finite, absurd
+    const ControllerStatus st = c.update(in, out);
+    s.plant.advance(out, true);
+    ASSERT_EQ(st, ControllerStatus::invalid_input) << "tick " << k;
+    ASSERT_EQ(out.fault.field, InputField::normal_force);
+    ASSERT_EQ(out.fault.finger, 1);
+    ASSERT_TRUE(all_outputs_finite(out)) << "tick " << k;
+  }
+  // Just above the configured bound is refused, at it is accepted.
+  s.plant.fill(in, true);
+  in.fingers[1].contact.normal_force = std::nextafter(s.config.max_measured_force, kInf);
+  EXPECT_EQ(c.update(in, out), ControllerStatus::invalid_input);
+  in.fingers[1].contact.normal_force = s.config.max_measured_force;
+  EXPECT_NE(c.update(in, out), ControllerStatus::invalid_input);
+}
+
+TEST(ReactiveControllerHardening, NonFiniteIntermediateGivesNumericalFaultZeroOutputAndOldState) {
+  Scene<PlanarCtrl> s = planar_scene<PlanarCtrl>();
+  PlanarCtrl c;
+  PlanarCtrl::Input in;
+  PlanarCtrl::Output out;
+  configure_and_grasp(c, s, in, out);
+  ASSERT_TRUE(c.start_manipulation(planar_task(s.plant.box.pose)).ok());
+  for (int k = 0; k < 300; ++k) ASSERT_EQ(tick(c, s.plant, in, out), ControllerStatus::ok);
+  // A measured object 1e308 m away is finite, so it passes the input checks, but the
+  // pose error times the gain overflows and the twist bound turns inf into NaN.
+  PlanarCtrl twin = c;
+  PlanarCtrl::Output twin_out = twin.make_output();
+  s.plant.fill(in, true);
+  PlanarCtrl::Input far = in;
+  far.object_pose.position = V2(-1e308, 0.0);
+  EXPECT_EQ(c.update(far, out), ControllerStatus::numerical_fault);
+  ASSERT_NE(out.numerical_fault, nullptr);
+  EXPECT_STREQ(out.numerical_fault, "pose_feedback");
+  EXPECT_TRUE(zero_joint_velocities(c, out));
+  EXPECT_TRUE(all_outputs_finite(out));
+  EXPECT_STREQ(inhand::to_string(ControllerStatus::numerical_fault), "numerical_fault");
+  // The state is that of before the tick: the same next tick gives the same output as
+  // a controller that never saw it.
+  const ControllerStatus a = c.update(in, out);
+  const ControllerStatus b = twin.update(in, twin_out);
+  EXPECT_EQ(a, b);
+  std::string why;
+  EXPECT_TRUE(same_output(out, twin_out, why)) << why;
+  EXPECT_EQ(out.numerical_fault, nullptr);
+}
+
+TEST(ReactiveControllerHardening, ReflectedObjectPoseAndUnnormalisedNormalsAreInvalid) {
+  Scene<PlanarCtrl> s = planar_scene<PlanarCtrl>();
+  PlanarCtrl c;
+  PlanarCtrl::Input in;
+  PlanarCtrl::Output out;
+  configure_and_grasp(c, s, in, out);
+  ASSERT_TRUE(c.start_manipulation(planar_task(s.plant.box.pose)).ok());
+  for (int k = 0; k < 20; ++k) ASSERT_EQ(tick(c, s.plant, in, out), ControllerStatus::ok);
+  s.plant.fill(in, true);
+  PlanarCtrl::Input bad = in;
+  bad.object_pose.rotation(1, 1) = -1.0;  // orthonormal, det -1: a reflection
+  bad.object_pose.rotation(1, 0) = 0.0;
+  bad.object_pose.rotation(0, 1) = 0.0;
+  bad.object_pose.rotation(0, 0) = 1.0;
+  EXPECT_EQ(c.update(bad, out), ControllerStatus::invalid_input);
+  EXPECT_EQ(out.fault.field, InputField::object_pose);
+  for (const double scale : {0.5, 0.9, 0.998, 1.002, 1.3, 1.5}) {
+    bad = in;
+    bad.fingers[2].contact.normal *= scale;
+    EXPECT_EQ(c.update(bad, out), ControllerStatus::invalid_input) << "length " << scale;
+    EXPECT_EQ(out.fault.field, InputField::contact_normal);
+    EXPECT_EQ(out.fault.finger, 2);
+  }
+  bad = in;
+  bad.fingers[2].contact.normal *= 1.0005;  // within 1e-3 of unit length
+  EXPECT_EQ(c.update(bad, out), ControllerStatus::ok);
+}
+
+TEST(ReactiveControllerHardening, ImplausibleContactsAreFlaggedPerFinger) {
+  Scene<PlanarCtrl> s = planar_scene<PlanarCtrl>();
+  PlanarCtrl c;
+  PlanarCtrl::Input in;
+  PlanarCtrl::Output out;
+  ASSERT_TRUE(c.configure(s.config).ok());
+  in = c.make_input();
+  out = c.make_output();
+  ASSERT_TRUE(c.start_grasp(s.targets).ok());
+  // The scene's contacts lie on the fingertip spheres: never flagged.
+  int grasp_ticks = -1;
+  for (int k = 0; k < 4000 && grasp_ticks < 0; ++k) {
+    if (tick(c, s.plant, in, out) == ControllerStatus::grasped) grasp_ticks = k;
+    ASSERT_FALSE(has(out.warnings, ControllerWarning::implausible_contact)) << "tick " << k;
+  }
+  ASSERT_GT(grasp_ticks, 0);
+  ASSERT_TRUE(c.start_manipulation(planar_task(s.plant.box.pose)).ok());
+  for (int k = 0; k < 500; ++k) {
+    ASSERT_EQ(tick(c, s.plant, in, out), ControllerStatus::ok);
+    ASSERT_FALSE(has(out.warnings, ControllerWarning::implausible_contact)) << "tick " << k;
+    for (const auto& f : out.fingers) ASSERT_FALSE(f.implausible_contact);
+  }
+  // A contact point 1 m from finger 1's fingertip.
+  s.plant.fill(in, true);
+  PlanarCtrl::Input bad = in;
+  bad.fingers[1].contact.contact_point += V2(0.0, 1.0);
+  ASSERT_EQ(c.update(bad, out), ControllerStatus::ok);
+  EXPECT_TRUE(has(out.warnings, ControllerWarning::implausible_contact));
+  EXPECT_FALSE(out.fingers[0].implausible_contact);
+  EXPECT_TRUE(out.fingers[1].implausible_contact);
+  EXPECT_FALSE(out.fingers[2].implausible_contact);
+  // A normal pointing into finger 2's fingertip (unit length, point on the sphere).
+  s.plant.time += s.plant.dt;
+  s.plant.fill(in, true);
+  bad = in;
+  bad.fingers[2].contact.normal = -bad.fingers[2].contact.normal;
+  ASSERT_EQ(c.update(bad, out), ControllerStatus::ok);
+  EXPECT_TRUE(has(out.warnings, ControllerWarning::implausible_contact));
+  EXPECT_FALSE(out.fingers[1].implausible_contact);
+  EXPECT_TRUE(out.fingers[2].implausible_contact);
+  // Back to plausible data: the flags clear.
+  s.plant.time += s.plant.dt;
+  s.plant.fill(in, true);
+  ASSERT_EQ(c.update(in, out), ControllerStatus::ok);
+  EXPECT_FALSE(has(out.warnings, ControllerWarning::implausible_contact));
+}
+
+TEST(ReactiveControllerHardening, TrajectoryMustStartAtTheMeasuredPose) {
+  Scene<PlanarCtrl> s = planar_scene<PlanarCtrl>();
+  PlanarCtrl c;
+  PlanarCtrl::Input in;
+  PlanarCtrl::Output out;
+  // The object sits 3 cm from the world origin, where a default trajectory starts.
+  s.plant.box.pose.position = V2(0.0, 0.03);
+  for (auto& f : s.config.fingers) f.chain.base.position += V2(0.0, 0.03);
+  for (auto& ch : s.plant.chains) ch.base.position += V2(0.0, 0.03);
+  for (auto& t : s.targets) t.contact_point += V2(0.0, 0.03);
+  configure_and_grasp(c, s, in, out);
+  inhand::Validation v = c.start_manipulation(inhand::ObjectTrajectory<double, 2>{});
+  ASSERT_FALSE(v.ok());
+  EXPECT_STREQ(v.field, "trajectory.start_pose.position");
+  Pose<double, 2> turned = s.plant.box.pose;
+  turned.rotation = inhand::so2_exp(0.3) * turned.rotation;
+  v = c.start_manipulation(planar_task(turned));
+  ASSERT_FALSE(v.ok());
+  EXPECT_STREQ(v.field, "trajectory.start_pose.rotation");
+  Pose<double, 2> reflected = s.plant.box.pose;
+  reflected.rotation(1, 1) = -1.0;
+  inhand::ObjectTrajectory<double, 2> tr;
+  tr.reset(reflected);
+  v = c.start_manipulation(tr);
+  ASSERT_FALSE(v.ok());
+  EXPECT_STREQ(v.field, "trajectory.start_pose.rotation");
+  // Within the tolerance (5 mm < 1 cm) it starts.
+  Pose<double, 2> near = s.plant.box.pose;
+  near.position += V2(0.005, 0.0);
+  ASSERT_TRUE(c.start_manipulation(planar_task(near)).ok());
+  // Held off by 5 mm (the object does not move), the pose integral reaches its bound
+  // and says so.
+  s.plant.object_moves = false;
+  bool limited = false;
+  for (int k = 0; k < 1000; ++k) {
+    tick(c, s.plant, in, out);
+    limited = limited || has(out.warnings, ControllerWarning::pose_integral_limited);
+    ASSERT_LE(out.pose_error_integral.head<2>().norm(),
+              s.config.pose_feedback.position_integral_limit * (1 + 1e-12));
+  }
+  EXPECT_TRUE(limited);
+}
+
+TEST(ReactiveControllerHardening, FloatControllerKeepsTimeAfterAWeek) {
+  using FloatCtrl = inhand::ReactiveController<float, 2, inhand::Dynamic, 3>;
+  FloatCtrl::Config cfg;
+  cfg.fingers.resize(1);
+  const auto chain = planar_chain<PlanarCtrl::Chain>(V2(0, 0), 0.0);
+  auto& fc = cfg.fingers[0].chain;
+  fc.base.position = chain.base.position.cast<float>();
+  for (int j = 0; j < 3; ++j) {
+    fc.joints[j].parent_to_joint.position = chain.joints[j].parent_to_joint.position.cast<float>();
+    fc.joints[j].max_velocity = 3.0f;
+  }
+  fc.joint_to_tip.position = chain.joint_to_tip.position.cast<float>();
+  FloatCtrl c;
+  ASSERT_TRUE(c.configure(cfg).ok());
+  FloatCtrl::Input in = c.make_input();
+  FloatCtrl::Output out = c.make_output();
+  in.fingers[0].joint_positions << 0.3f, 0.2f, 0.1f;
+  const double t0 = 604800.0;  // one week of uptime, in seconds
+  for (int k = 0; k < 2000; ++k) {
+    in.time = t0 + 1e-3 * k;
+    ASSERT_EQ(c.update(in, out), ControllerStatus::idle) << "tick " << k;
+    if (k > 0) {
+      ASSERT_NEAR(static_cast<double>(out.dt), 1e-3, 1e-9) << "tick " << k;
+    }
+  }
+  // A step that vanishes in float is refused as a time fault, not integrated as 0.
+  in.time = in.time + 1e-300;
+  EXPECT_EQ(c.update(in, out), ControllerStatus::invalid_input);
+  EXPECT_EQ(out.fault.field, InputField::time);
+}
+
+// Valid template arguments compile (the impossible ones are refused by static_asserts,
+// checked by the compile-failure tests of tests/compile_fail).
+TEST(ReactiveControllerHardening, ValidTemplateArgumentsInstantiate) {
+  inhand::ReactiveController<float, 3, 1, 2> a;
+  inhand::ReactiveController<double, 2, inhand::Dynamic, inhand::Dynamic, 4> b;
+  inhand::ReactiveController<long double, 3, 5, 4> d;
+  EXPECT_FALSE(a.configured());
+  EXPECT_FALSE(b.configured());
+  EXPECT_FALSE(d.configured());
 }
 
 }  // namespace

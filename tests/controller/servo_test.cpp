@@ -292,13 +292,52 @@ TEST(ServoGains, ValidateNamesTheController) {
   ServoGains<double> g;
   EXPECT_TRUE(g.validate().ok());
   g.motion.kp = -1;
-  EXPECT_STREQ(g.validate().field, "servo.motion");
+  EXPECT_STREQ(g.validate().field, "servo.motion.kp");
   g = {};
   g.force.ki = std::nan("");
-  EXPECT_STREQ(g.validate().field, "servo.force");
+  EXPECT_STREQ(g.validate().field, "servo.force.ki");
   g = {};
   g.force.output_limit = 0;
-  EXPECT_STREQ(g.validate().field, "servo.force");
+  EXPECT_STREQ(g.validate().field, "servo.force.output_limit");
+  g = {};
+  g.motion.integral_limit = -1;
+  EXPECT_STREQ(g.validate().field, "servo.motion.integral_limit");
+  g = {};
+  g.max_integral_velocity = std::numeric_limits<double>::infinity();
+  EXPECT_STREQ(g.validate().field, "servo.max_integral_velocity");
+}
+
+// The default force PI has a finite integral bound derived from its gains: the
+// integral term adds at most max_integral_velocity (0.1 m/s), i.e. |I| <= 0.1 / ki =
+// 0.5 N s; reaching it is reported. A constant 1 N error held for 100 s would
+// otherwise integrate to 100 N s.
+TEST(ServoGains, DefaultForceIntegratorIsBoundedAndReportsIt) {
+  const ServoGains<double> g;
+  HybridServo<double, 3> servo(g);
+  ServoCommand<double, 3> out;
+  const Eigen::Vector3d n = Eigen::Vector3d::UnitX();
+  bool reported = false;
+  for (int k = 0; k < 100000; ++k) {
+    const ServoStatus st = servo.update(Eigen::Vector3d::Zero(), 2.0, 1.0, n, true, 1e-3, out);
+    reported = reported || has(st, ServoStatus::force_saturated);
+  }
+  const double bound = g.max_integral_velocity / g.force.ki;
+  EXPECT_LE(std::abs(servo.force_pi().integral()(0)), bound * (1 + 1e-12));
+  EXPECT_NEAR(std::abs(servo.force_pi().integral()(0)), bound, 1e-12);
+  EXPECT_TRUE(reported);
+  // |e_f| = kp |df| + ki |I| <= kp * 1 N + max_integral_velocity.
+  EXPECT_LE(out.force.norm(), g.force.kp * 1.0 + g.max_integral_velocity + 1e-12);
+  // An explicit, smaller integral_limit wins over the derived one.
+  ServoGains<double> h;
+  h.force.integral_limit = 0.1;
+  HybridServo<double, 3> tight(h);
+  for (int k = 0; k < 10000; ++k)
+    tight.update(Eigen::Vector3d::Zero(), 2.0, 1.0, n, true, 1e-3, out);
+  EXPECT_NEAR(std::abs(tight.force_pi().integral()(0)), 0.1, 1e-12);
+  // ki = 0 (the default motion PI): the unused integral stays zero.
+  for (int k = 0; k < 1000; ++k)
+    servo.update(Eigen::Vector3d(1.0, 2.0, 3.0), 0.0, 0.0, n, false, 1e-3, out);
+  EXPECT_TRUE(servo.motion_pi().integral().isZero(0.0));
 }
 
 }  // namespace

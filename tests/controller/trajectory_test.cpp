@@ -412,4 +412,50 @@ TEST(ObjectTrajectory, NaNTimeHoldsTheStartPoseWithFiniteOutput) {
   EXPECT_TRUE(s.pose.is_finite());
 }
 
+// A finite but denormal duration makes 1 / duration infinite and the sample NaN: such
+// segments are refused when appended, with the field named, as are durations whose
+// reciprocate cycles are that short and displacements large enough to overflow.
+TEST(ObjectTrajectory, SegmentsThatWouldOverflowAreRefused) {
+  using Seg = TrajectorySegment<double, 3>;
+  using Traj = ObjectTrajectory<double, 3>;
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
+  const struct {
+    const char* name;
+    Seg seg;
+    const char* field;
+  } cases[] = {
+      {"denormal move", Seg::move(x, 0.005, 1e-310), "segment.duration"},
+      {"denormal rotate", Seg::rotate(x, 0.1, 4.9e-324), "segment.duration"},
+      {"smallest normal duration", Seg::move(x, 0.005, 2.3e-308), "segment.duration"},
+      {"sub-microsecond", Seg::move(x, 0.005, 1e-7), "segment.duration"},
+      {"longer than 1e9 s", Seg::hold_for(1e300), "segment.duration"},
+      {"enormous move", Seg::move(x, 1e300, 1.0), "segment.displacement"},
+      {"reciprocate cycles too short",
+       Seg::reciprocate(inhand::Twist<double, 3>::Constant(1e-3), 1e-3, 100000), "segment.cycles"},
+  };
+  for (const auto& c : cases) {
+    const inhand::Validation v = Traj::validate_segment(c.seg);
+    ASSERT_FALSE(v.ok()) << c.name;
+    EXPECT_STREQ(v.field, c.field) << c.name;
+    Traj t;
+    t.reset(Pose<double, 3>{});
+    EXPECT_FALSE(t.append(c.seg)) << c.name;
+    EXPECT_EQ(t.size(), 0) << c.name;
+    EXPECT_TRUE(t.validate().ok()) << c.name;
+  }
+  // The shortest accepted segment still samples finitely.
+  Traj t;
+  t.reset(Pose<double, 3>{});
+  ASSERT_TRUE(t.append(Seg::move(x, 0.005, 1e-6)));
+  const auto sample = t.evaluate(0.5e-6);
+  EXPECT_TRUE(sample.pose.is_finite());
+  EXPECT_TRUE(inhand::all_finite(sample.twist));
+  // A start pose that is not a rotation is refused by validate().
+  Pose<double, 3> bad;
+  bad.rotation *= 2.0;
+  Traj u;
+  u.reset(bad);
+  EXPECT_STREQ(u.validate().field, "trajectory.start_pose.rotation");
+}
+
 }  // namespace

@@ -64,7 +64,11 @@ struct IkReport {
 template <typename Scalar>
 struct IkParams {
   DampingSchedule<Scalar> damping{};
-  Validation validate() const noexcept { return damping.validate(); }
+  /// Field names relative to the controller Config ("ik.damping.max_damping").
+  Validation validate() const noexcept {
+    return damping.validate(
+        DampingScheduleNames{"ik.damping.singular_threshold", "ik.damping.max_damping"});
+  }
 };
 
 /// Contact-point IK for a Dim x Dof Jacobian. Dof and MaxDof follow FingerChain:

@@ -16,11 +16,21 @@
 // Twists are (linear velocity of the object reference point ; angular velocity).
 //
 // Real-time contract: update() is noexcept, allocates nothing (fixed NumFingers and
-// fixed or bounded DOF), never prints. Invalid input (non-finite or malformed) makes
-// update() return ControllerStatus::invalid_input with `output.fault` naming the field
-// and finger; the output is then the documented fallback: zero joint velocity for every
-// finger, and no internal state changes (integrators, filters, time are frozen), so
-// the next valid tick resumes where the last valid one ended.
+// fixed or bounded DOF, an Output from make_output()), never prints, and runs in time
+// bounded by the hand's size. Invalid input (non-finite or malformed) makes update()
+// return ControllerStatus::invalid_input with `output.fault` naming the field and
+// finger; the output is then the documented fallback: zero joint velocity in every
+// finger slot the Output has (never resized), and no internal state changes
+// (integrators, filters, time are frozen), so the next valid tick resumes where the
+// last valid one ended. Malformed includes an Input or Output with the wrong number of
+// fingers (InputField::finger_count) and an Output whose joint_velocities do not have
+// the finger's DOF (InputField::output_joint_velocities): update() never resizes.
+// Nothing non-finite leaves update(): the outputs are checked at the end of every tick;
+// a non-finite value (an overflow the input checks did not foresee) gives
+// ControllerStatus::numerical_fault, Output::numerical_fault naming the stage, the same
+// zero fallback and the state of the tick before (update() saves it at the start).
+// Time: Input::time is a double whatever Scalar is (a time base that keeps 1 us
+// resolution for ~270 years); dt is computed in double and then converted to Scalar.
 //
 // Phases, driven by the user: configure() -> start_grasp(targets) -> update() ...
 // returns `grasped` once every finger presses with the nominal force -> the user
@@ -49,13 +59,15 @@ namespace inhand {
 
 /// Overall result of one update().
 enum class ControllerStatus : unsigned char {
-  ok,              ///< manipulating, every finger in contact
-  grasping,        ///< grasp phase running
-  grasped,         ///< grasp complete: every finger presses with the nominal force
-  contact_lost,    ///< manipulating, at least one finger is reacquiring its contact
-  idle,            ///< configured, no task started: zero output
-  not_configured,  ///< configure() has not succeeded: zero output
-  invalid_input,   ///< see ControllerOutput::fault; zero output, state frozen
+  ok,               ///< manipulating, every finger in contact
+  grasping,         ///< grasp phase running
+  grasped,          ///< grasp complete: every finger presses with the nominal force
+  contact_lost,     ///< manipulating, at least one finger is reacquiring its contact
+  idle,             ///< configured, no task started: zero output
+  not_configured,   ///< configure() has not succeeded: zero output
+  invalid_input,    ///< see ControllerOutput::fault; zero output, state frozen
+  numerical_fault,  ///< a non-finite value arose (Output::numerical_fault names where);
+                    ///< zero output, state as before the tick
 };
 inline const char* to_string(ControllerStatus s) noexcept {
   switch (s) {
@@ -73,6 +85,8 @@ inline const char* to_string(ControllerStatus s) noexcept {
       return "not_configured";
     case ControllerStatus::invalid_input:
       return "invalid_input";
+    case ControllerStatus::numerical_fault:
+      return "numerical_fault";
   }
   return "unknown";
 }
@@ -88,6 +102,8 @@ enum class InputField : unsigned char {
   normal_force,
   jacobian,
   virtual_contact_point,
+  finger_count,             ///< Input::fingers or Output::fingers has the wrong size
+  output_joint_velocities,  ///< an Output finger's joint_velocities is not its DOF long
 };
 inline const char* to_string(InputField f) noexcept {
   switch (f) {
@@ -109,13 +125,17 @@ inline const char* to_string(InputField f) noexcept {
       return "jacobian";
     case InputField::virtual_contact_point:
       return "virtual_contact_point";
+    case InputField::finger_count:
+      return "finger_count";
+    case InputField::output_joint_velocities:
+      return "output_joint_velocities";
   }
   return "unknown";
 }
 
 struct InputFault {
   InputField field = InputField::none;
-  int finger = -1;  ///< -1 for hand-level fields (time, object pose)
+  int finger = -1;  ///< -1 for hand-level fields (time, object pose, finger_count)
 };
 
 /// Warnings raised during a valid tick (bit flags, never silent saturation).
@@ -135,6 +155,8 @@ enum class ControllerWarning : unsigned {
   grip_raised = 1u << 11,   ///< the grip is above the nominal pattern (force layer)
   beyond_capacity = 1u << 12,  ///< the load needs more than max_force: the object may be lost
   force_integral_limited = 1u << 13,  ///< some force integrator reached its bound
+  pose_integral_limited = 1u << 14,   ///< layer 1's pose-error integral reached its bound
+  implausible_contact = 1u << 15,     ///< some contact is far from / behind its fingertip
 };
 constexpr ControllerWarning operator|(ControllerWarning a, ControllerWarning b) noexcept {
   return static_cast<ControllerWarning>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
@@ -153,7 +175,11 @@ struct PoseFeedback {
   /// the force servos' integrators balance the proportional pose feedback.
   Scalar position_integral_gain = Scalar(10);
   Scalar orientation_integral_gain = Scalar(10);
-  /// Bounds on the integrated pose error (m s and rad s), anti-windup.
+  /// Bounds on the integrated pose error (m s and rad s), anti-windup: the norm of
+  /// each part is scaled down to its bound (direction kept) and the warning
+  /// pose_integral_limited is raised. The defaults let the integral term add at most
+  /// position_integral_gain * 2e-3 = 0.02 m/s and orientation_integral_gain * 2e-2 =
+  /// 0.2 rad/s, i.e. 40 % and 20 % of the default speed bounds.
   Scalar position_integral_limit = Scalar(2e-3);
   Scalar orientation_integral_limit = Scalar(2e-2);
   Validation validate() const noexcept {
@@ -162,10 +188,11 @@ struct PoseFeedback {
     if (!is_finite(orientation_integral_gain) || orientation_integral_gain < Scalar(0))
       return Validation::invalid("pose_feedback.orientation_integral_gain",
                                  "must be finite and >= 0");
-    if (!(position_integral_limit > Scalar(0)))
-      return Validation::invalid("pose_feedback.position_integral_limit", "must be > 0");
-    if (!(orientation_integral_limit > Scalar(0)))
-      return Validation::invalid("pose_feedback.orientation_integral_limit", "must be > 0");
+    if (!is_finite(position_integral_limit) || !(position_integral_limit > Scalar(0)))
+      return Validation::invalid("pose_feedback.position_integral_limit", "must be finite and > 0");
+    if (!is_finite(orientation_integral_limit) || !(orientation_integral_limit > Scalar(0)))
+      return Validation::invalid("pose_feedback.orientation_integral_limit",
+                                 "must be finite and > 0");
     if (!is_finite(position_gain) || position_gain < Scalar(0))
       return Validation::invalid("pose_feedback.position_gain", "must be finite and >= 0");
     if (!is_finite(orientation_gain) || orientation_gain < Scalar(0))
@@ -217,6 +244,21 @@ using FingerArray =
 /// (sized by configure(), which then allocates once).
 template <typename Scalar_, int Dim_, int NumFingers_, int Dof_, int MaxDof_ = Dof_>
 class ReactiveController {
+  // Impossible template arguments, refused here with a message rather than deep inside
+  // Eigen or at configure().
+  static_assert(std::is_floating_point<Scalar_>::value,
+                "ReactiveController: Scalar must be float, double or long double");
+  static_assert(Dim_ == 2 || Dim_ == 3,
+                "ReactiveController: Dim must be 2 (planar) or 3 (spatial)");
+  static_assert(NumFingers_ == Dynamic || NumFingers_ >= 1,
+                "ReactiveController: NumFingers must be >= 1 or inhand::Dynamic");
+  static_assert(Dof_ == Dynamic || Dof_ >= 1,
+                "ReactiveController: Dof must be >= 1 or inhand::Dynamic");
+  static_assert(MaxDof_ == Dynamic || MaxDof_ >= 1,
+                "ReactiveController: MaxDof must be >= 1 or inhand::Dynamic");
+  static_assert(Dof_ == Dynamic || MaxDof_ == Dof_,
+                "ReactiveController: with a fixed Dof, MaxDof must equal Dof");
+
  public:
   using Scalar = Scalar_;
   static constexpr int Dim = Dim_;
@@ -267,14 +309,34 @@ class ReactiveController {
     ForceLayerParams<Scalar> force_layer{};
     GraspParams<Scalar> grasp{};
     OutlierGates<Scalar> outlier_gates{};
+    /// N, > 0 and >= force_planner.nominal_force: plausibility bound on a measured
+    /// normal force. A larger reading is invalid input (fault normal_force), like a
+    /// non-finite one: no finger sensor reads ten kilonewtons, and an unbounded force
+    /// would overflow the force layer's arithmetic.
+    Scalar max_measured_force = Scalar(1e4);
+    /// m, > 0 (+inf disables): chain kinematics only. A touching finger's contact is
+    /// implausible when the contact point lies farther than this from the fingertip
+    /// sphere's surface, | |c - p| - r | > contact_tolerance (c the sphere centre from
+    /// forward kinematics, r its radius, p the contact point), or when the normal points
+    /// into the fingertip, n . (c - p) < 0 (n, the object's outward normal, points from
+    /// the object towards the fingertip, so n . (c - p) = r for a true contact). Such a
+    /// contact is still used (soft pads, calibration offsets), but flagged: the finger's
+    /// FingerOutput::implausible_contact and the warning implausible_contact.
+    Scalar contact_tolerance = Scalar(0.01);
+    /// start_manipulation() refuses a trajectory whose start pose is farther than this
+    /// from the measured object pose (m, and rad of the rotation between them); > 0.
+    Scalar start_position_tolerance = Scalar(0.01);
+    Scalar start_orientation_tolerance = Scalar(0.2);
   };
 
   /// Tactile contact of one finger (world frame).
   struct TactileContact {
     bool touching = false;
     Vec contact_point = Vec::Zero();  ///< m
-    Vec normal = Vec::UnitX();        ///< object's outward unit normal
-    Scalar normal_force = Scalar(0);  ///< N, >= 0
+    /// Object's outward unit normal: its length must be within 1e-3 of 1 (else invalid
+    /// input, fault contact_normal); the controller normalises it.
+    Vec normal = Vec::UnitX();
+    Scalar normal_force = Scalar(0);  ///< N, in [0, Config::max_measured_force]
   };
 
   struct FingerInput {
@@ -291,8 +353,11 @@ class ReactiveController {
   };
 
   struct Input {
-    Scalar time = Scalar(0);  ///< s, strictly increasing
-    PoseT object_pose{};      ///< measured object pose
+    /// s, strictly increasing. A double whatever Scalar is: a float time stamp stops
+    /// resolving 1 ms steps after 9 hours. Consecutive stamps must differ by a dt that
+    /// is > 0 in Scalar too.
+    double time = 0.0;
+    PoseT object_pose{};  ///< measured object pose
     detail::FingerArray<FingerInput, NumFingers> fingers{};
   };
 
@@ -311,6 +376,8 @@ class ReactiveController {
     Scalar stiffness_estimate = Scalar(0);  ///< N/m, the force loop's estimate (force_layer.hpp)
     Scalar force_integral = Scalar(0);      ///< N s, the force loop's integrator (internal part)
     bool slipping = false;                  ///< the contact slides along the object
+    /// The contact is implausible for the chain kinematics (Config::contact_tolerance).
+    bool implausible_contact = false;
   };
 
   struct Output {
@@ -332,6 +399,12 @@ class ReactiveController {
     InputFault fault{};
     Scalar manipulation_time = Scalar(0);  ///< s since start_manipulation
     int segment = -1;                      ///< active trajectory segment
+    /// s, the time step this tick integrated (after the max_tick bound); 0 when the
+    /// tick was rejected.
+    Scalar dt = Scalar(0);
+    /// With ControllerStatus::numerical_fault: the stage whose output was not finite
+    /// ("trajectory", "pose_feedback", "force_layer", "servo", "ik"); else nullptr.
+    const char* numerical_fault = nullptr;
   };
 
   /// Controller phase (see the file comment).
@@ -353,15 +426,25 @@ class ReactiveController {
     Validation v = c.pose_feedback.validate();
     if (!v.ok()) return v;
     if (!(v = c.servo.validate()).ok()) return v;
-    if (!(v = c.ik.validate()).ok()) return Validation::invalid("ik.damping", v.reason);
+    if (!(v = c.ik.validate()).ok()) return v;
     if (!(v = c.force_planner.validate()).ok()) return v;
     if (!(v = c.force_layer.validate()).ok()) return v;
     if (!(v = c.grasp.validate()).ok()) return v;
     if (!(v = c.outlier_gates.validate()).ok()) return v;
+    if (!is_finite(c.max_measured_force) || !(c.max_measured_force > Scalar(0)) ||
+        !(c.max_measured_force >= c.force_planner.nominal_force))
+      return Validation::invalid("max_measured_force",
+                                 "must be finite, > 0 and >= force_planner.nominal_force");
+    if (!(c.contact_tolerance > Scalar(0)) || c.contact_tolerance != c.contact_tolerance)
+      return Validation::invalid("contact_tolerance", "must be > 0 (+inf disables)");
+    if (!is_finite(c.start_position_tolerance) || !(c.start_position_tolerance > Scalar(0)))
+      return Validation::invalid("start_position_tolerance", "must be finite and > 0");
+    if (!is_finite(c.start_orientation_tolerance) || !(c.start_orientation_tolerance > Scalar(0)))
+      return Validation::invalid("start_orientation_tolerance", "must be finite and > 0");
     bool any_balancing = false;
     for (int i = 0; i < n; ++i) {
       const FingerConfig& f = c.fingers[static_cast<std::size_t>(i)];
-      if (!(v = f.chain.validate()).ok()) return v.for_finger(i);
+      if (!(v = f.chain.validate(true)).ok()) return v.for_finger(i);
       any_balancing = any_balancing || f.role == FingerRole::balancing;
     }
     if (n > 1 && !any_balancing)
@@ -407,6 +490,7 @@ class ReactiveController {
     advance_ = Planner::ForceVector::Zero(n);
     configured_ = true;
     reset();
+    save_state();  // sizes the saved copy once (run-time sizes allocate here only)
     return Validation::valid();
   }
 
@@ -485,10 +569,23 @@ class ReactiveController {
 
   /// Starts tracking `trajectory` (its start pose is normally the measured pose at
   /// release). Allowed once the grasp has completed, or while already manipulating.
+  /// The trajectory must be valid (ObjectTrajectory::validate) and start within
+  /// Config::start_position_tolerance / start_orientation_tolerance of the last
+  /// measured object pose (after the outlier gate): a default-constructed trajectory
+  /// starts at the world origin, and the pose feedback would drive the object there.
   Validation start_manipulation(const Trajectory& trajectory) noexcept {
     if (!configured_) return Validation::invalid("controller", "not configured");
     if (phase_ != Phase::grasped && phase_ != Phase::manipulating)
       return Validation::invalid("phase", "the grasp has not completed");
+    const Validation tv = trajectory.validate();
+    if (!tv.ok()) return tv;
+    const Twist<Scalar, Dim> gap = pose_error(trajectory.start_pose(), object_pose_);
+    if (!(gap.template head<Dim>().norm() <= config_.start_position_tolerance))
+      return Validation::invalid("trajectory.start_pose.position",
+                                 "farther than start_position_tolerance from the measured pose");
+    if (!(gap.template tail<SpatialDim<Dim>::kRot>().norm() <= config_.start_orientation_tolerance))
+      return Validation::invalid("trajectory.start_pose.rotation",
+                                 "farther than start_orientation_tolerance from the measured pose");
     trajectory_ = trajectory;
     manipulation_time_ = Scalar(0);
     if (phase_ != Phase::manipulating) pose_error_integral_.setZero();
@@ -502,6 +599,8 @@ class ReactiveController {
   ControllerStatus update(const Input& in, Output& out) noexcept {
     out.warnings = ControllerWarning::none;
     out.fault = InputFault{};
+    out.numerical_fault = nullptr;
+    out.dt = Scalar(0);
     const int n = finger_count();
     if (!configured_) {
       zero_output(out);
@@ -509,8 +608,17 @@ class ReactiveController {
     }
     if (static_cast<int>(in.fingers.size()) != n || static_cast<int>(out.fingers.size()) != n) {
       // Only possible for run-time finger counts; nothing sensible to command.
-      out.fault = InputFault{InputField::joint_positions, -1};
+      zero_output(out);
+      out.fault = InputFault{InputField::finger_count, -1};
       return ControllerStatus::invalid_input;
+    }
+    for (int i = 0; i < n; ++i) {
+      if (out.fingers[static_cast<std::size_t>(i)].joint_velocities.size() !=
+          config_.fingers[static_cast<std::size_t>(i)].chain.dof()) {
+        zero_output(out);
+        out.fault = InputFault{InputField::output_joint_velocities, i};
+        return ControllerStatus::invalid_input;
+      }
     }
     const InputFault fault = check_input(in);
     if (fault.field != InputField::none) {
@@ -518,21 +626,38 @@ class ReactiveController {
       out.fault = fault;
       return ControllerStatus::invalid_input;
     }
-    Scalar dt = has_time_ ? in.time - last_time_ : config_.control_period;
-    if (dt > config_.max_tick) {
-      dt = config_.max_tick;
+    save_state();
+    // dt in double (the time base), then in Scalar.
+    double dt_time = has_time_ ? in.time - last_time_ : static_cast<double>(config_.control_period);
+    if (dt_time > static_cast<double>(config_.max_tick)) {
+      dt_time = static_cast<double>(config_.max_tick);
       out.warnings = out.warnings | ControllerWarning::long_tick;
     }
+    const Scalar dt = static_cast<Scalar>(dt_time);
+    out.dt = dt;
     last_time_ = in.time;
     gate_inputs(in, dt, out.warnings);
     has_time_ = true;
 
+    ControllerStatus status = ControllerStatus::idle;
     if (phase_ == Phase::idle) {
       zero_output(out);
-      return ControllerStatus::idle;
+    } else if (phase_ == Phase::manipulating) {
+      status = manipulate(in, dt, out);
+    } else {
+      status = grasp(in, dt, out);
     }
-    if (phase_ == Phase::manipulating) return manipulate(in, dt, out);
-    return grasp(in, dt, out);
+    // Last line of defence: nothing non-finite leaves update().
+    const char* stage = non_finite_stage(out);
+    if (stage != nullptr) {
+      restore_state();
+      zero_output(out);
+      clear_diagnostics(out);
+      out.dt = Scalar(0);
+      out.numerical_fault = stage;
+      return ControllerStatus::numerical_fault;
+    }
+    return status;
   }
 
   /// Tick-to-tick bound on the change of a finger's joint-velocity command is not
@@ -573,12 +698,14 @@ class ReactiveController {
   };
 
   InputFault check_input(const Input& in) const noexcept {
-    if (!is_finite(in.time) || (has_time_ && !(in.time > last_time_)))
+    // Strictly increasing, also once the step is converted to Scalar.
+    if (!is_finite(in.time) ||
+        (has_time_ && !(static_cast<Scalar>(in.time - last_time_) > Scalar(0))))
       return {InputField::time, -1};
+    // A measured rotation: orthonormal to 1e-3 (a pose estimate is not re-orthonormalised
+    // to machine precision) and det +1 (not a reflection).
+    if (!in.object_pose.has_rotation(Scalar(1e-3))) return {InputField::object_pose, -1};
     if (!in.object_pose.is_finite()) return {InputField::object_pose, -1};
-    const Rotation<Scalar, Dim> RtR = in.object_pose.rotation.transpose() * in.object_pose.rotation;
-    if (!((RtR - Rotation<Scalar, Dim>::Identity()).cwiseAbs().maxCoeff() < Scalar(1e-3)))
-      return {InputField::object_pose, -1};
     for (int i = 0; i < finger_count(); ++i) {
       const FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
       const FingerConfig& fc = config_.fingers[static_cast<std::size_t>(i)];
@@ -586,10 +713,11 @@ class ReactiveController {
         return {InputField::joint_positions, i};
       if (f.contact.touching) {
         if (!all_finite(f.contact.contact_point)) return {InputField::contact_point, i};
-        const Scalar nn = f.contact.normal.norm();
-        if (!all_finite(f.contact.normal) || !(nn > Scalar(0.5) && nn < Scalar(1.5)))
+        if (!all_finite(f.contact.normal) ||
+            !(std::abs(f.contact.normal.norm() - Scalar(1)) <= Scalar(1e-3)))
           return {InputField::contact_normal, i};
-        if (!is_finite(f.contact.normal_force) || f.contact.normal_force < Scalar(0))
+        if (!is_finite(f.contact.normal_force) || f.contact.normal_force < Scalar(0) ||
+            f.contact.normal_force > config_.max_measured_force)
           return {InputField::normal_force, i};
       }
       if (fc.kinematics == KinematicsSource::external) {
@@ -602,21 +730,110 @@ class ReactiveController {
     return {};
   }
 
+  /// The fallback output: every finger slot the Output has is zeroed at its current
+  /// size (never resized: no allocation).
   void zero_output(Output& out) const noexcept {
     for (int i = 0; i < static_cast<int>(out.fingers.size()); ++i) {
       FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
-      const int dof = i < finger_count() ? config_.fingers[static_cast<std::size_t>(i)].chain.dof()
-                                         : static_cast<int>(fo.joint_velocities.size());
-      fo.joint_velocities.setZero(dof);
+      fo.joint_velocities.setZero();
       fo.desired_contact_velocity.setZero();
       fo.desired_normal_force = Scalar(0);
       fo.servo = ServoCommand<Scalar, Dim>{};
       fo.ik = IkReport<Scalar>{};
       fo.servo_status = ServoStatus::ok;
+      fo.force_target = Scalar(0);
+      fo.implausible_contact = false;
       if (i < finger_count()) fo.state = slots_[static_cast<std::size_t>(i)].state;
     }
     out.commanded_twist.setZero();
     out.feedforward_twist.setZero();
+  }
+
+  /// After a numerical fault: every diagnostic output set from the (restored) state or
+  /// to zero, so that nothing non-finite is left in `out`.
+  void clear_diagnostics(Output& out) const noexcept {
+    out.desired_object_pose = object_pose_;
+    out.pose_error.setZero();
+    out.pose_error_integral = pose_error_integral_;
+    out.force_residual.setZero();
+    out.load_estimate.setZero();
+    out.grip = Scalar(1);
+    out.manipulation_time = manipulation_time_;
+    for (FingerOutput& fo : out.fingers) {
+      fo.stiffness_estimate = Scalar(0);
+      fo.force_integral = Scalar(0);
+    }
+  }
+
+  /// The first stage whose output is not finite, or nullptr.
+  const char* non_finite_stage(const Output& out) const noexcept {
+    if (!out.desired_object_pose.is_finite() || !all_finite(out.feedforward_twist) ||
+        !is_finite(out.manipulation_time))
+      return "trajectory";
+    if (!all_finite(out.pose_error) || !all_finite(out.commanded_twist) ||
+        !all_finite(out.pose_error_integral))
+      return "pose_feedback";
+    if (!all_finite(out.force_residual) || !all_finite(out.load_estimate) || !is_finite(out.grip))
+      return "force_layer";
+    for (const FingerOutput& fo : out.fingers) {
+      if (!is_finite(fo.desired_normal_force) || !is_finite(fo.force_target) ||
+          !is_finite(fo.stiffness_estimate) || !is_finite(fo.force_integral))
+        return "force_layer";
+      if (!all_finite(fo.desired_contact_velocity) || !all_finite(fo.servo.motion) ||
+          !all_finite(fo.servo.force) || !all_finite(fo.servo.total))
+        return "servo";
+      if (!all_finite(fo.joint_velocities) || !is_finite(fo.ik.min_singular_value) ||
+          !is_finite(fo.ik.damping) || !is_finite(fo.ik.limit_scale))
+        return "ik";
+    }
+    return nullptr;
+  }
+
+  /// The state a tick may change, copied before it (same sizes: no allocation).
+  struct SavedState {
+    detail::FingerArray<Slot, NumFingers> slots{};
+    Planner planner{};
+    Forces forces{};
+    typename Forces::Result force_result{};
+    Phase phase = Phase::idle;
+    double last_time = 0.0;
+    bool has_time = false;
+    Scalar settled_time = Scalar(0);
+    Scalar manipulation_time = Scalar(0);
+    TwistT pose_error_integral = TwistT::Zero();
+    PoseT object_pose{};
+    int pose_rejections = 0;
+    Scalar pose_age = Scalar(0);
+  };
+  void save_state() noexcept {
+    saved_.slots = slots_;
+    saved_.planner = planner_;
+    saved_.forces = forces_;
+    saved_.force_result = force_result_;
+    saved_.phase = phase_;
+    saved_.last_time = last_time_;
+    saved_.has_time = has_time_;
+    saved_.settled_time = settled_time_;
+    saved_.manipulation_time = manipulation_time_;
+    saved_.pose_error_integral = pose_error_integral_;
+    saved_.object_pose = object_pose_;
+    saved_.pose_rejections = pose_rejections_;
+    saved_.pose_age = pose_age_;
+  }
+  void restore_state() noexcept {
+    slots_ = saved_.slots;
+    planner_ = saved_.planner;
+    forces_ = saved_.forces;
+    force_result_ = saved_.force_result;
+    phase_ = saved_.phase;
+    last_time_ = saved_.last_time;
+    has_time_ = saved_.has_time;
+    settled_time_ = saved_.settled_time;
+    manipulation_time_ = saved_.manipulation_time;
+    pose_error_integral_ = saved_.pose_error_integral;
+    object_pose_ = saved_.object_pose;
+    pose_rejections_ = saved_.pose_rejections;
+    pose_age_ = saved_.pose_age;
   }
 
   /// Plausibility gates (OutlierGates): sets object_pose_ and each slot's force_used.
@@ -772,12 +989,25 @@ class ReactiveController {
     fo.state = s.state;
   }
 
-  void update_kinematics(const Input& in) noexcept {
+  /// Forward kinematics of the chain fingers, and the plausibility of each touching
+  /// chain finger's contact (Config::contact_tolerance).
+  void update_kinematics(const Input& in, Output& out, ControllerWarning& w) noexcept {
     for (int i = 0; i < finger_count(); ++i) {
       const FingerConfig& fc = config_.fingers[static_cast<std::size_t>(i)];
-      if (fc.kinematics == KinematicsSource::chain)
-        forward_kinematics(fc.chain, in.fingers[static_cast<std::size_t>(i)].joint_positions,
-                           slots_[static_cast<std::size_t>(i)].kinematics);
+      const FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
+      Slot& s = slots_[static_cast<std::size_t>(i)];
+      bool implausible = false;
+      if (fc.kinematics == KinematicsSource::chain) {
+        forward_kinematics(fc.chain, f.joint_positions, s.kinematics);
+        if (f.contact.touching) {
+          const Vec d = s.kinematics.fingertip.position - f.contact.contact_point;
+          implausible =
+              std::abs(d.norm() - fc.chain.fingertip_radius) > config_.contact_tolerance ||
+              f.contact.normal.dot(d) < Scalar(0);
+        }
+      }
+      out.fingers[static_cast<std::size_t>(i)].implausible_contact = implausible;
+      if (implausible) w = w | ControllerWarning::implausible_contact;
     }
   }
 
@@ -788,8 +1018,8 @@ class ReactiveController {
   }
 
   ControllerStatus grasp(const Input& in, Scalar dt, Output& out) noexcept {
-    update_kinematics(in);
     ControllerWarning w = out.warnings;
+    update_kinematics(in, out, w);
     const GraspParams<Scalar>& g = config_.grasp;
     const Scalar f0 = config_.force_planner.nominal_force;
     desired_forces_.setConstant(f0);
@@ -858,8 +1088,8 @@ class ReactiveController {
   }
 
   ControllerStatus manipulate(const Input& in, Scalar dt, Output& out) noexcept {
-    update_kinematics(in);
     ControllerWarning w = out.warnings;
+    update_kinematics(in, out, w);
     manipulation_time_ += dt;
     // Layer 1: desired pose and commanded twist (feed-forward + feedback, method.md s.3).
     const TrajectorySample<Scalar, Dim> sample = trajectory_.evaluate(manipulation_time_);
@@ -873,11 +1103,15 @@ class ReactiveController {
     // Integral of the pose error, each part limited in norm (direction kept).
     pose_error_integral_ += dt * out.pose_error;
     const Scalar ip = pose_error_integral_.template head<Dim>().norm();
-    if (ip > pf.position_integral_limit)
+    if (ip > pf.position_integral_limit) {
       pose_error_integral_.template head<Dim>() *= pf.position_integral_limit / ip;
+      w = w | ControllerWarning::pose_integral_limited;
+    }
     const Scalar ir = pose_error_integral_.template tail<R>().norm();
-    if (ir > pf.orientation_integral_limit)
+    if (ir > pf.orientation_integral_limit) {
       pose_error_integral_.template tail<R>() *= pf.orientation_integral_limit / ir;
+      w = w | ControllerWarning::pose_integral_limited;
+    }
     TwistT V = sample.twist;
     V.template head<Dim>() += pf.position_gain * out.pose_error.template head<Dim>() +
                               pf.position_integral_gain * pose_error_integral_.template head<Dim>();
@@ -967,7 +1201,7 @@ class ReactiveController {
   Forces forces_{};
   typename Forces::Result force_result_{};
   Trajectory trajectory_{};
-  Scalar last_time_ = Scalar(0);
+  double last_time_ = 0.0;  ///< s, the time base (see Input::time)
   bool has_time_ = false;
   Scalar settled_time_ = Scalar(0);
   Scalar manipulation_time_ = Scalar(0);
@@ -975,6 +1209,7 @@ class ReactiveController {
   PoseT object_pose_{};  ///< measured object pose after the gate
   int pose_rejections_ = 0;
   Scalar pose_age_ = Scalar(0);
+  SavedState saved_{};
 };
 
 }  // namespace inhand

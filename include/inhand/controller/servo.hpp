@@ -12,7 +12,17 @@
 // g2 acts on the scalar df and is applied along the CURRENT normal each tick, so a
 // rolling contact does not carry a stale normal in the integrator.
 // Units: velocities m/s; g2 gains are admittances, (m/s)/N and (m/s)/(N s).
+// Integrator bounds. Both PIs get a finite integral bound by default, derived from
+// the gains: the integral term ki * I may contribute at most `max_integral_velocity`
+// (m/s) to the command, so the effective bound is
+//   I_max = min(integral_limit, max_integral_velocity / ki)
+// (g1: I in m, ki in 1/s; g2: I in N s, ki in (m/s)/(N s)); an explicit finite
+// integral_limit below it wins. With ki = 0 the integral does not reach the output:
+// it is cleared every step (so it cannot grow without bound either). Reaching the
+// bound is reported: ServoStatus motion_saturated / force_saturated.
 #pragma once
+
+#include <algorithm>
 
 #include "inhand/math/pi_controller.hpp"
 
@@ -24,13 +34,32 @@ struct ServoGains {
   PiGains<Scalar> motion{Scalar(1), Scalar(0)};
   /// g2: the force PI, (m/s)/N.
   PiGains<Scalar> force{Scalar(0.02), Scalar(0.2)};
+  /// m/s, > 0: the most the integral term of either PI may add to the command (see
+  /// the file comment: it bounds both integrators).
+  Scalar max_integral_velocity = Scalar(0.1);
 
+  /// Field names relative to the controller Config ("servo.force.ki").
   Validation validate() const noexcept {
-    Validation v = motion.validate();
-    if (!v.ok()) return Validation::invalid("servo.motion", v.reason);
-    v = force.validate();
-    if (!v.ok()) return Validation::invalid("servo.force", v.reason);
+    Validation v =
+        motion.validate(PiGainNames{"servo.motion.kp", "servo.motion.ki",
+                                    "servo.motion.integral_limit", "servo.motion.output_limit"});
+    if (!v.ok()) return v;
+    v = force.validate(PiGainNames{"servo.force.kp", "servo.force.ki", "servo.force.integral_limit",
+                                   "servo.force.output_limit"});
+    if (!v.ok()) return v;
+    if (!is_finite(max_integral_velocity) || !(max_integral_velocity > Scalar(0)))
+      return Validation::invalid("servo.max_integral_velocity", "must be finite and > 0");
     return Validation::valid();
+  }
+
+  /// The gains a PI runs with: integral_limit lowered to max_integral_velocity / ki
+  /// (ki > 0), or to max_integral_velocity * 1 s (ki = 0, where it has no effect).
+  PiGains<Scalar> bounded(const PiGains<Scalar>& g) const noexcept {
+    PiGains<Scalar> b = g;
+    const Scalar derived =
+        g.ki > Scalar(0) ? max_integral_velocity / g.ki : max_integral_velocity * Scalar(1);
+    b.integral_limit = std::min(g.integral_limit, derived);
+    return b;
   }
 };
 
@@ -47,7 +76,7 @@ enum class ServoStatus : unsigned {
   motion_saturated = 1u << 0,  ///< g1 hit an integral or output limit
   force_saturated = 1u << 1,   ///< g2 hit an integral or output limit
   both_saturated = 3u,
-  invalid_input = 1u << 2,     ///< non-finite input: command zero, integrators frozen
+  invalid_input = 1u << 2,  ///< non-finite input: command zero, integrators frozen
 };
 constexpr ServoStatus operator|(ServoStatus a, ServoStatus b) noexcept {
   return static_cast<ServoStatus>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
@@ -64,8 +93,8 @@ class HybridServo {
 
   void set_gains(const ServoGains<Scalar>& g) noexcept {
     gains_ = g;
-    motion_.set_gains(g.motion);
-    force_.set_gains(g.force);
+    motion_.set_gains(g.bounded(g.motion));
+    force_.set_gains(g.bounded(g.force));
   }
   const ServoGains<Scalar>& gains() const noexcept { return gains_; }
   void reset() noexcept {
@@ -81,17 +110,19 @@ class HybridServo {
                      Scalar measured_force, const Vector<Scalar, Dim>& normal, bool force_active,
                      Scalar dt, ServoCommand<Scalar, Dim>& out) noexcept {
     if (!all_finite(desired_velocity) || !is_finite(dt) || !(dt > Scalar(0)) ||
-        (force_active && (!is_finite(desired_force) || !is_finite(measured_force) ||
-                          !all_finite(normal)))) {
+        (force_active &&
+         (!is_finite(desired_force) || !is_finite(measured_force) || !all_finite(normal)))) {
       out = ServoCommand<Scalar, Dim>{};
       return ServoStatus::invalid_input;
     }
     ServoStatus status = ServoStatus::ok;
     if (motion_.update(desired_velocity, dt, out.motion) != PiStatus::ok)
       status = status | ServoStatus::motion_saturated;
+    if (!(gains_.motion.ki > Scalar(0))) motion_.reset();  // unused integral: kept at zero
     if (force_active) {
       Eigen::Matrix<Scalar, 1, 1> df(desired_force - measured_force), u;
       if (force_.update(df, dt, u) != PiStatus::ok) status = status | ServoStatus::force_saturated;
+      if (!(gains_.force.ki > Scalar(0))) force_.reset();
       out.force = -u(0) * normal;  // df > 0: move along -n, into the object
     } else {
       out.force.setZero();

@@ -18,8 +18,10 @@
 // Segments live in a fixed-capacity array: evaluate() is noexcept and allocation-free.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "inhand/math/pose.hpp"
 #include "inhand/math/status.hpp"
@@ -111,13 +113,42 @@ class ObjectTrajectory {
     total_ += s.duration;
     return true;
   }
+  /// Bounds that keep evaluate() finite in any Scalar: a duration (and, for a
+  /// reciprocate, the duration of one cycle) of at least kMinDuration, so that the rate
+  /// 1 / duration cannot overflow (a finite but denormal duration would make it
+  /// infinite), at most kMaxDuration, and a displacement of norm at most
+  /// kMaxDisplacement (m, or rad for the angular part).
+  static constexpr double kMinDuration = 1e-6;     ///< s
+  static constexpr double kMaxDuration = 1e9;      ///< s (about 30 years)
+  static constexpr double kMaxDisplacement = 1e6;  ///< m and rad
   static Validation validate_segment(const Segment& s) noexcept {
-    if (!is_finite(s.duration) || !(s.duration > Scalar(0)))
-      return Validation::invalid("segment.duration", "must be finite and > 0");
+    if (!is_finite(s.duration) || !(s.duration >= Scalar(kMinDuration)) ||
+        !(s.duration <= Scalar(kMaxDuration)))
+      return Validation::invalid("segment.duration", "must be finite, in [1e-6 s, 1e9 s]");
     if (!all_finite(s.displacement))
       return Validation::invalid("segment.displacement", "must be finite");
+    if (!(s.displacement.template head<Dim>().norm() <= Scalar(kMaxDisplacement)) ||
+        !(s.displacement.template tail<SpatialDim<Dim>::kRot>().norm() <= Scalar(kMaxDisplacement)))
+      return Validation::invalid("segment.displacement", "each part must be at most 1e6 (m, rad)");
     if (s.kind == SegmentKind::reciprocate && s.cycles < 1)
       return Validation::invalid("segment.cycles", "must be >= 1");
+    if (s.kind == SegmentKind::reciprocate &&
+        !(s.duration / Scalar(s.cycles) >= Scalar(kMinDuration)))
+      return Validation::invalid("segment.cycles", "each cycle must last at least 1e-6 s");
+    return Validation::valid();
+  }
+  /// The whole trajectory: a finite start pose with a proper rotation (to 1e-6, or 100
+  /// epsilons of Scalar) and valid segments (append() admits no other).
+  Validation validate() const noexcept {
+    const Scalar tol = std::max(Scalar(1e-6), Scalar(100) * std::numeric_limits<Scalar>::epsilon());
+    if (!start_.is_finite()) return Validation::invalid("trajectory.start_pose", "must be finite");
+    if (!start_.has_rotation(tol))
+      return Validation::invalid("trajectory.start_pose.rotation",
+                                 "must be a rotation (orthonormal, det +1)");
+    for (int i = 0; i < count_; ++i) {
+      const Validation v = validate_segment(segments_[static_cast<std::size_t>(i)]);
+      if (!v.ok()) return Validation::invalid("trajectory.segments", v.reason, i);
+    }
     return Validation::valid();
   }
 

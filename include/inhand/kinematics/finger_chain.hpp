@@ -18,6 +18,7 @@
 // Dynamic> is fully run-time sized and allocates only when built or resized.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <type_traits>
@@ -165,28 +166,64 @@ struct FingerChain {
     return v;
   }
 
-  /// Checks finiteness, unit axes (planar: +-z), limits order and positive speeds.
-  Validation validate() const noexcept {
-    if (dof() < 1) return Validation::invalid("joints", "a finger needs at least one joint");
-    if (!base.is_finite()) return Validation::invalid("base", "must be finite");
-    if (!joint_to_tip.is_finite()) return Validation::invalid("joint_to_tip", "must be finite");
+  /// Checks finiteness, proper rotations in every frame (base, each joint's
+  /// parent_to_joint, joint_to_tip: orthonormal to rotation_tolerance() and det +1),
+  /// unit axes (planar: +-z), limits order and positive speeds. Field names are relative
+  /// to the chain ("joints.parent_to_joint.rotation", index = the joint); with
+  /// `in_hand` they are relative to the controller Config
+  /// ("fingers.chain.joints.parent_to_joint.rotation", the caller sets the finger).
+  Validation validate(bool in_hand = false) const noexcept {
+    auto name = [in_hand](const char* own, const char* hand) { return in_hand ? hand : own; };
+    const Scalar rtol = rotation_tolerance();
+    if (dof() < 1)
+      return Validation::invalid(name("joints", "fingers.chain.joints"),
+                                 "a finger needs at least one joint");
+    if (!base.is_finite())
+      return Validation::invalid(name("base", "fingers.chain.base"), "must be finite");
+    if (!base.has_rotation(rtol))
+      return Validation::invalid(name("base.rotation", "fingers.chain.base.rotation"),
+                                 "must be a rotation (orthonormal, det +1)");
+    if (!joint_to_tip.is_finite())
+      return Validation::invalid(name("joint_to_tip", "fingers.chain.joint_to_tip"),
+                                 "must be finite");
+    if (!joint_to_tip.has_rotation(rtol))
+      return Validation::invalid(
+          name("joint_to_tip.rotation", "fingers.chain.joint_to_tip.rotation"),
+          "must be a rotation (orthonormal, det +1)");
     if (!(fingertip_radius >= Scalar(0)) || !is_finite(fingertip_radius))
-      return Validation::invalid("fingertip_radius", "must be finite and >= 0");
+      return Validation::invalid(name("fingertip_radius", "fingers.chain.fingertip_radius"),
+                                 "must be finite and >= 0");
     const Scalar tol = std::sqrt(Eigen::NumTraits<Scalar>::epsilon()) * Scalar(10);
     for (int i = 0; i < dof(); ++i) {
       const Joint& j = joints[i];
       if (!j.parent_to_joint.is_finite())
-        return Validation::invalid("joints.parent_to_joint", "must be finite", i);
+        return Validation::invalid(
+            name("joints.parent_to_joint", "fingers.chain.joints.parent_to_joint"),
+            "must be finite", i);
+      if (!j.parent_to_joint.has_rotation(rtol))
+        return Validation::invalid(name("joints.parent_to_joint.rotation",
+                                        "fingers.chain.joints.parent_to_joint.rotation"),
+                                   "must be a rotation (orthonormal, det +1)", i);
       if (!all_finite(j.axis) || std::abs(j.axis.norm() - Scalar(1)) > tol)
-        return Validation::invalid("joints.axis", "must be a finite unit vector", i);
+        return Validation::invalid(name("joints.axis", "fingers.chain.joints.axis"),
+                                   "must be a finite unit vector", i);
       if (Dim == 2 && (std::abs(j.axis.x()) > tol || std::abs(j.axis.y()) > tol))
-        return Validation::invalid("joints.axis", "planar joints rotate about +z or -z", i);
+        return Validation::invalid(name("joints.axis", "fingers.chain.joints.axis"),
+                                   "planar joints rotate about +z or -z", i);
       if (!is_finite(j.lower) || !is_finite(j.upper) || !(j.lower <= j.upper))
-        return Validation::invalid("joints.lower/upper", "must be finite with lower <= upper", i);
+        return Validation::invalid(name("joints.lower/upper", "fingers.chain.joints.lower/upper"),
+                                   "must be finite with lower <= upper", i);
       if (!is_finite(j.max_velocity) || !(j.max_velocity > Scalar(0)))
-        return Validation::invalid("joints.max_velocity", "must be finite and > 0", i);
+        return Validation::invalid(name("joints.max_velocity", "fingers.chain.joints.max_velocity"),
+                                   "must be finite and > 0", i);
     }
     return Validation::valid();
+  }
+
+  /// Tolerance of the rotation check, dimensionless: max |R^T R - I| <= 1e-6 (double),
+  /// or 100 machine epsilons for a coarser Scalar (float: 1.2e-5).
+  static Scalar rotation_tolerance() noexcept {
+    return std::max(Scalar(1e-6), Scalar(100) * Eigen::NumTraits<Scalar>::epsilon());
   }
 };
 

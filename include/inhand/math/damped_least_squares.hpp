@@ -23,6 +23,13 @@
 
 namespace inhand {
 
+/// Full names of the DampingSchedule fields, for validate(): string literals such as
+/// "ik.damping.max_damping".
+struct DampingScheduleNames {
+  const char* singular_threshold = "singular_threshold";
+  const char* max_damping = "max_damping";
+};
+
 template <typename Scalar>
 struct DampingSchedule {
   /// Singular-value threshold epsilon (units of J, m/rad for a contact Jacobian), > 0.
@@ -30,11 +37,11 @@ struct DampingSchedule {
   /// Damping lambda reached at sigma_min = 0 (same units), >= 0.
   Scalar max_damping = Scalar(5e-3);
 
-  Validation validate() const noexcept {
+  Validation validate(const DampingScheduleNames& names = DampingScheduleNames{}) const noexcept {
     if (!is_finite(singular_threshold) || !(singular_threshold > Scalar(0)))
-      return Validation::invalid("singular_threshold", "must be finite and > 0");
+      return Validation::invalid(names.singular_threshold, "must be finite and > 0");
     if (!is_finite(max_damping) || !(max_damping >= Scalar(0)))
-      return Validation::invalid("max_damping", "must be finite and >= 0");
+      return Validation::invalid(names.max_damping, "must be finite and >= 0");
     return Validation::valid();
   }
   /// lambda^2 for a given smallest singular value.

@@ -19,6 +19,15 @@
 
 namespace inhand {
 
+/// Full names of the four PiGains fields, for validate(): string literals such as
+/// "servo.force.kp", so that the error names the field wherever the gains live.
+struct PiGainNames {
+  const char* kp = "kp";
+  const char* ki = "ki";
+  const char* integral_limit = "integral_limit";
+  const char* output_limit = "output_limit";
+};
+
 template <typename Scalar>
 struct PiGains {
   Scalar kp = Scalar(1);
@@ -28,11 +37,14 @@ struct PiGains {
   /// Bound on the norm of the output, > 0.
   Scalar output_limit = std::numeric_limits<Scalar>::infinity();
 
-  Validation validate() const noexcept {
-    if (!is_finite(kp) || kp < Scalar(0)) return Validation::invalid("kp", "must be finite and >= 0");
-    if (!is_finite(ki) || ki < Scalar(0)) return Validation::invalid("ki", "must be finite and >= 0");
-    if (!(integral_limit > Scalar(0))) return Validation::invalid("integral_limit", "must be > 0");
-    if (!(output_limit > Scalar(0))) return Validation::invalid("output_limit", "must be > 0");
+  Validation validate(const PiGainNames& names = PiGainNames{}) const noexcept {
+    if (!is_finite(kp) || kp < Scalar(0))
+      return Validation::invalid(names.kp, "must be finite and >= 0");
+    if (!is_finite(ki) || ki < Scalar(0))
+      return Validation::invalid(names.ki, "must be finite and >= 0");
+    if (!(integral_limit > Scalar(0)))
+      return Validation::invalid(names.integral_limit, "must be > 0");
+    if (!(output_limit > Scalar(0))) return Validation::invalid(names.output_limit, "must be > 0");
     return Validation::valid();
   }
 };
@@ -58,7 +70,9 @@ class PiController {
   using Vec = Eigen::Matrix<Scalar, N, 1>;
 
   PiController() noexcept { integral_.setZero(); }
-  explicit PiController(const PiGains<Scalar>& gains) noexcept : gains_(gains) { integral_.setZero(); }
+  explicit PiController(const PiGains<Scalar>& gains) noexcept : gains_(gains) {
+    integral_.setZero();
+  }
 
   void set_gains(const PiGains<Scalar>& g) noexcept { gains_ = g; }
   const PiGains<Scalar>& gains() const noexcept { return gains_; }

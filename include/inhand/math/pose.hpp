@@ -12,6 +12,17 @@
 
 namespace inhand {
 
+/// R is a proper rotation to `tolerance` (dimensionless, absolute on each entry of
+/// R^T R - I, i.e. relative to the unit scale of a rotation): finite, orthonormal and
+/// det R > 0. A NaN tolerance or entry gives false.
+template <typename Scalar, int Dim>
+inline bool is_rotation(const Rotation<Scalar, Dim>& R, Scalar tolerance) noexcept {
+  if (!all_finite(R)) return false;
+  const Rotation<Scalar, Dim> RtR = R.transpose() * R;
+  return (RtR - Rotation<Scalar, Dim>::Identity()).cwiseAbs().maxCoeff() <= tolerance &&
+         R.determinant() > Scalar(0);
+}
+
 template <typename Scalar, int Dim>
 struct Pose {
   Vector<Scalar, Dim> position = Vector<Scalar, Dim>::Zero();
@@ -36,6 +47,9 @@ struct Pose {
     return out;
   }
   bool is_finite() const noexcept { return all_finite(position) && all_finite(rotation); }
+  /// The rotation is a proper rotation: max |R^T R - I| <= tolerance and det R > 0
+  /// (rules out a scaled matrix, a zero matrix and a reflection).
+  bool has_rotation(Scalar tolerance) const noexcept { return is_rotation(rotation, tolerance); }
   template <typename Other>
   Pose<Other, Dim> cast() const noexcept {
     Pose<Other, Dim> out;
@@ -75,8 +89,8 @@ inline Pose<Scalar, Dim> integrate(const Pose<Scalar, Dim>& pose, const Twist<Sc
                                    Scalar dt) noexcept {
   Pose<Scalar, Dim> out;
   out.position = pose.position + dt * twist.template head<Dim>();
-  out.rotation = rotation_exp<Scalar>(
-                     AngularVector<Scalar, Dim>(dt * twist.template tail<SpatialDim<Dim>::kRot>())) *
+  out.rotation = rotation_exp<Scalar>(AngularVector<Scalar, Dim>(
+                     dt * twist.template tail<SpatialDim<Dim>::kRot>())) *
                  pose.rotation;
   return out;
 }
