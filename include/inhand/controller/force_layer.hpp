@@ -195,6 +195,9 @@ class ForceLayer {
     e_.setZero(fingers);
     q_int_.setZero(fingers);
     r_load_.setZero(fingers);
+    // A factorisation in a defined state (an uncomputed Eigen::LDLT holds indeterminate
+    // members, which copying the layer would read).
+    ldlt_.compute(Eigen::Matrix<Scalar, W, W>::Identity());
     reset();
   }
   int size() const noexcept { return n_; }
