@@ -62,7 +62,7 @@ struct TraceRow {
   std::string stage_name;
   Pose<double, Dim> desired{}, measured{}, actual{};
   std::vector<TraceFinger<Dim>> fingers;
-  double grip = 1.0;  ///< the force layer's grip scale
+  double grip = 1.0;      ///< the force layer's grip scale
   unsigned warnings = 0;  ///< ControllerWarning bits of the tick
   /// Load estimate (force; torque) and layer 1's pose-error integral (m s; rad s).
   Twist<double, Dim> load = Twist<double, Dim>::Zero();

@@ -226,7 +226,8 @@ long whole_tick_allocations(long& ticks) {
     f.chain.fingertip_radius = src.fingertip_radius;
     EXPECT_TRUE(f.chain.joints.resize(src.dof()));
     for (int j = 0; j < src.dof(); ++j) f.chain.joints[j] = src.joints[j];
-    f.role = static_cast<int>(i) == hand.thumb ? inhand::FingerRole::balancing : inhand::FingerRole::preset;
+    f.role = static_cast<int>(i) == hand.thumb ? inhand::FingerRole::balancing
+                                               : inhand::FingerRole::preset;
     cfg.fingers.push_back(f);
   }
   Controller c;
@@ -262,7 +263,8 @@ long whole_tick_allocations(long& ticks) {
       allocations += region.allocations();
     }
     for (int i = 0; i < plant.finger_count(); ++i)
-      plant.set_joint_velocity_command(i, out.fingers[static_cast<std::size_t>(i)].joint_velocities);
+      plant.set_joint_velocity_command(i,
+                                       out.fingers[static_cast<std::size_t>(i)].joint_velocities);
     plant.step(1e-3);
     ++ticks;
     return st;
