@@ -23,6 +23,7 @@
 #include <cmath>
 #include <vector>
 
+#include "inhand/math/flags.hpp"
 #include "inhand/math/status.hpp"
 #include "inhand/math/types.hpp"
 
@@ -62,12 +63,8 @@ enum class ForcePlanStatus : unsigned {
   no_balancing_contact = 1u << 1,  ///< no balancing finger touches: resultant not balanced
   invalid_input = 1u << 2,
 };
-constexpr ForcePlanStatus operator|(ForcePlanStatus a, ForcePlanStatus b) noexcept {
-  return static_cast<ForcePlanStatus>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
-}
-constexpr bool has(ForcePlanStatus s, ForcePlanStatus flag) noexcept {
-  return (static_cast<unsigned>(s) & static_cast<unsigned>(flag)) != 0u;
-}
+template <>
+struct is_flags<ForcePlanStatus> : std::true_type {};
 
 /// Planner for NumFingers fingers (fixed, or inhand::Dynamic sized at construction).
 template <typename Scalar, int Dim, int NumFingers>

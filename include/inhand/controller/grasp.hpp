@@ -25,6 +25,9 @@
 // Units: m, m/s, s; all points and normals in the world frame.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+
 #include "inhand/math/status.hpp"
 #include "inhand/math/types.hpp"
 
@@ -40,26 +43,31 @@ enum class FingerState : unsigned char {
 };
 inline const char* to_string(FingerState s) noexcept {
   switch (s) {
-    case FingerState::idle: return "idle";
-    case FingerState::approaching: return "approaching";
-    case FingerState::pressing: return "pressing";
-    case FingerState::in_contact: return "in_contact";
-    case FingerState::reacquiring: return "reacquiring";
+    case FingerState::idle:
+      return "idle";
+    case FingerState::approaching:
+      return "approaching";
+    case FingerState::pressing:
+      return "pressing";
+    case FingerState::in_contact:
+      return "in_contact";
+    case FingerState::reacquiring:
+      return "reacquiring";
   }
   return "unknown";
 }
 
 template <typename Scalar>
 struct GraspParams {
-  Scalar approach_gain = Scalar(4);       ///< 1/s, proportional gain towards the target
-  Scalar approach_speed = Scalar(0.03);   ///< m/s, cap on the approach velocity
-  Scalar creep_speed = Scalar(0.005);     ///< m/s along -n until contact is sensed
-  Scalar tangential_gain = Scalar(5);     ///< 1/s, pressing: tangential pull to the target
-  Scalar force_tolerance = Scalar(0.1);   ///< relative, grasp-complete criterion
-  Scalar position_tolerance = Scalar(1e-3);  ///< m, tangential, grasp-complete criterion
-  Scalar alignment_speed = Scalar(0.1);      ///< m/s, pressing: normal alignment speed
-  Scalar alignment_tolerance = Scalar(0.05); ///< rad, grasp-complete criterion
-  Scalar settle_time = Scalar(0.1);       ///< s the criterion must hold
+  Scalar approach_gain = Scalar(4);           ///< 1/s, proportional gain towards the target
+  Scalar approach_speed = Scalar(0.03);       ///< m/s, cap on the approach velocity
+  Scalar creep_speed = Scalar(0.005);         ///< m/s along -n until contact is sensed
+  Scalar tangential_gain = Scalar(5);         ///< 1/s, pressing: tangential pull to the target
+  Scalar force_tolerance = Scalar(0.1);       ///< relative, grasp-complete criterion
+  Scalar position_tolerance = Scalar(1e-3);   ///< m, tangential, grasp-complete criterion
+  Scalar alignment_speed = Scalar(0.1);       ///< m/s, pressing: normal alignment speed
+  Scalar alignment_tolerance = Scalar(0.05);  ///< rad, grasp-complete criterion
+  Scalar settle_time = Scalar(0.1);           ///< s the criterion must hold
 
   Validation validate() const noexcept {
     if (!is_finite(approach_gain) || !(approach_gain > Scalar(0)))
@@ -91,7 +99,8 @@ struct GraspTarget {
   Vector<Scalar, Dim> normal = Vector<Scalar, Dim>::UnitX();  ///< unit, out of the object
 
   Validation validate() const noexcept {
-    if (!all_finite(contact_point)) return Validation::invalid("grasp_target.contact_point", "must be finite");
+    if (!all_finite(contact_point))
+      return Validation::invalid("grasp_target.contact_point", "must be finite");
     if (!all_finite(normal) || !(normal.norm() > Scalar(0.5)) || !(normal.norm() < Scalar(1.5)))
       return Validation::invalid("grasp_target.normal", "must be a finite unit vector");
     return Validation::valid();
@@ -103,7 +112,8 @@ struct GraspTarget {
 /// p_t (on the -n side) the P term keeps only its tangential part, so the finger
 /// goes on creeping inwards at creep_speed until contact is sensed.
 template <typename Scalar, int Dim>
-inline Vector<Scalar, Dim> approach_velocity(const GraspParams<Scalar>& g, const Vector<Scalar, Dim>& p_v,
+inline Vector<Scalar, Dim> approach_velocity(const GraspParams<Scalar>& g,
+                                             const Vector<Scalar, Dim>& p_v,
                                              const Vector<Scalar, Dim>& p_t,
                                              const Vector<Scalar, Dim>& n) noexcept {
   Vector<Scalar, Dim> e = p_t - p_v;
@@ -116,6 +126,60 @@ inline Vector<Scalar, Dim> approach_velocity(const GraspParams<Scalar>& g, const
   const Scalar speed = v.norm();
   if (speed > g.approach_speed) v *= g.approach_speed / speed;
   return v - g.creep_speed * n;
+}
+
+/// A pressing finger's progress towards its target: the window over which a stall is
+/// judged (see the file comment). Reset by start().
+template <typename Scalar, int Dim>
+struct SettleWindow {
+  Vector<Scalar, Dim> normal = Vector<Scalar, Dim>::Zero();  ///< at the window's start
+  Vector<Scalar, Dim> point = Vector<Scalar, Dim>::Zero();   ///< m, at the window's start
+  Scalar time = Scalar(0);                                   ///< s into the window
+  bool stalled = false;  ///< the last full window saw (almost) no progress
+  void start() noexcept {
+    time = Scalar(0);
+    stalled = false;
+  }
+};
+
+/// One pressing tick of the grasp phase for a touching finger.
+template <typename Scalar, int Dim>
+struct PressStep {
+  Vector<Scalar, Dim> velocity = Vector<Scalar, Dim>::Zero();  ///< m/s, contact velocity
+  bool placed = false;  ///< the contact reached its target, or stalled short of it
+};
+
+/// The pressing finger's contact velocity: the tangential pull of the measured contact
+/// point p (normal n) towards the target, plus the alignment of n with the target's
+/// normal; and whether the contact is placed (reached, or stalled over the last
+/// settle window). Updates the window.
+template <typename Scalar, int Dim>
+inline PressStep<Scalar, Dim> press_step(const GraspParams<Scalar>& g,
+                                         const GraspTarget<Scalar, Dim>& target,
+                                         const Vector<Scalar, Dim>& p, const Vector<Scalar, Dim>& n,
+                                         Scalar dt, SettleWindow<Scalar, Dim>& window) noexcept {
+  using Vec = Vector<Scalar, Dim>;
+  PressStep<Scalar, Dim> out;
+  const Vec d = target.contact_point - p;
+  const Vec d_tangential = d - d.dot(n) * n;
+  const Scalar cos_angle = n.dot(target.normal);
+  const Vec misalignment = target.normal - cos_angle * n;  // |.| = sin(angle)
+  out.velocity = g.tangential_gain * d_tangential + g.alignment_speed * misalignment;
+  if (window.time <= Scalar(0)) {
+    window.normal = n;
+    window.point = p;
+  }
+  window.time += dt;
+  if (window.time >= std::max(g.settle_time, dt)) {
+    window.stalled = (n - window.normal).norm() < Scalar(0.25) * std::sin(g.alignment_tolerance) &&
+                     (p - window.point).norm() < Scalar(0.25) * g.position_tolerance;
+    window.time = Scalar(0);
+  }
+  const bool reached = cos_angle > Scalar(0) &&
+                       misalignment.norm() <= std::sin(g.alignment_tolerance) &&
+                       d_tangential.norm() <= g.position_tolerance;
+  out.placed = reached || window.stalled;
+  return out;
 }
 
 }  // namespace inhand

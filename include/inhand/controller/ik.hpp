@@ -20,6 +20,7 @@
 #include <cmath>
 
 #include "inhand/math/damped_least_squares.hpp"
+#include "inhand/math/flags.hpp"
 
 namespace inhand {
 
@@ -31,12 +32,8 @@ enum class IkStatus : unsigned {
   damped_and_limited = 3u,
   invalid_input = 1u << 2,  ///< non-finite input; output is zero
 };
-constexpr IkStatus operator|(IkStatus a, IkStatus b) noexcept {
-  return static_cast<IkStatus>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
-}
-constexpr bool has(IkStatus s, IkStatus flag) noexcept {
-  return (static_cast<unsigned>(s) & static_cast<unsigned>(flag)) != 0u;
-}
+template <>
+struct is_flags<IkStatus> : std::true_type {};
 inline const char* to_string(IkStatus s) noexcept {
   switch (s) {
     case IkStatus::ok:

@@ -24,6 +24,7 @@
 
 #include <algorithm>
 
+#include "inhand/math/flags.hpp"
 #include "inhand/math/pi_controller.hpp"
 
 namespace inhand {
@@ -78,12 +79,8 @@ enum class ServoStatus : unsigned {
   both_saturated = 3u,
   invalid_input = 1u << 2,  ///< non-finite input: command zero, integrators frozen
 };
-constexpr ServoStatus operator|(ServoStatus a, ServoStatus b) noexcept {
-  return static_cast<ServoStatus>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
-}
-constexpr bool has(ServoStatus s, ServoStatus flag) noexcept {
-  return (static_cast<unsigned>(s) & static_cast<unsigned>(flag)) != 0u;
-}
+template <>
+struct is_flags<ServoStatus> : std::true_type {};
 
 template <typename Scalar, int Dim>
 class HybridServo {

@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 #include "inhand/math/pose.hpp"
@@ -236,8 +237,8 @@ class ObjectTrajectory {
   }
 
   Pose<Scalar, Dim> start_{};
-  std::array<Segment, MaxSegments> segments_{};
-  std::array<Pose<Scalar, Dim>, MaxSegments> segment_start_{};
+  std::array<Segment, static_cast<std::size_t>(MaxSegments)> segments_{};
+  std::array<Pose<Scalar, Dim>, static_cast<std::size_t>(MaxSegments)> segment_start_{};
   int count_ = 0;
   Scalar total_ = Scalar(0);
 };

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <limits>
 
+#include "inhand/math/flags.hpp"
 #include "inhand/math/status.hpp"
 #include "inhand/math/types.hpp"
 
@@ -57,12 +58,8 @@ enum class PiStatus : unsigned {
   integral_limited_and_output_limited = 3u,
   invalid_input = 1u << 2,
 };
-constexpr PiStatus operator|(PiStatus a, PiStatus b) noexcept {
-  return static_cast<PiStatus>(static_cast<unsigned>(a) | static_cast<unsigned>(b));
-}
-constexpr bool has(PiStatus s, PiStatus flag) noexcept {
-  return (static_cast<unsigned>(s) & static_cast<unsigned>(flag)) != 0u;
-}
+template <>
+struct is_flags<PiStatus> : std::true_type {};
 
 template <typename Scalar, int N>
 class PiController {

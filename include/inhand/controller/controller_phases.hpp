@@ -1,0 +1,240 @@
+// The two task phases of one controller tick, after the input checks and the sensor
+// gates (reactive_controller.hpp): the grasp phase (object held; grasp.hpp) and the
+// manipulation phase (layers 1-3 of docs/method.md section 7). Each takes this tick's
+// values (configuration, input, gated object pose, dt), updates the controller's state
+// and writes the Output; the force layer's input is assembled in the scratch.
+// Frames, units, signs: controller_io.hpp. noexcept, no allocation.
+#pragma once
+
+#include <cstddef>
+
+#include "inhand/controller/controller_state.hpp"
+#include "inhand/controller/finger_motion.hpp"
+#include "inhand/controller/trajectory.hpp"
+#include "inhand/kinematics/contact_kinematics.hpp"
+
+namespace inhand {
+
+/// This tick's values, shared by its steps.
+template <typename Types>
+struct TickInput {
+  const typename Types::Config& config;
+  const typename Types::Input& in;
+  const typename Types::PoseT& object;  ///< the gated measured object pose
+  typename Types::ScalarType dt;        ///< s
+};
+
+namespace detail {
+
+/// Layer 2's force layer: the touching fingers' contacts (unit normals), gated forces
+/// and measured normal advance since the last tick; `object_free` false while grasping.
+template <typename Types>
+void run_force_layer(const TickInput<Types>& t, bool object_free, ControllerState<Types>& st,
+                     TickScratch<Types>& sc) noexcept {
+  using Scalar = typename Types::ScalarType;
+  for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {
+    const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
+    FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+    sc.touching(i) = f.contact.touching ? 1 : 0;
+    sc.advance(i) = Scalar(0);
+    if (f.contact.touching) {
+      sc.normals.col(i) = f.contact.normal.normalized();
+      sc.points.col(i) = f.contact.contact_point;
+      sc.measured(i) = m.force_gate.force();
+      // Fingertip displacement since the last tick (last tick's Jacobian) less the
+      // displacement the last command gave the object there, along -n.
+      if (m.has_q_prev) {
+        m.q_prev = f.joint_positions - m.q_prev;  // the joint step (no temporary)
+        typename Types::Vec dp;
+        dp.noalias() = m.jacobian * m.q_prev;
+        sc.advance(i) = -sc.normals.col(i).dot(dp - t.dt * m.last_motion);
+      }
+    }
+    m.q_prev = f.joint_positions;
+    m.has_q_prev = true;
+  }
+  typename ForceLayer<Scalar, Types::kDim, Types::kNumFingers>::Step step;
+  step.touching = &sc.touching;
+  step.points = &sc.points;
+  step.normals = &sc.normals;
+  step.measured = &sc.measured;
+  step.pattern = &sc.pattern;
+  step.advance = &sc.advance;
+  step.object_position = t.object.position;
+  step.object_rotation = t.object.rotation;
+  step.min_force = t.config.force_planner.min_force;
+  step.max_force = t.config.force_planner.max_force;
+  step.object_free = object_free;
+  step.dt = t.dt;
+  st.forces.update(step, sc.forces);
+}
+
+/// Layers 2-3 for finger i at the point p of `points`: contact velocity v, the force
+/// layer's velocity when `force_active` (the finger touches), servo, IK, continuity.
+template <typename Types>
+ControllerWarning command_finger(const TickInput<Types>& t, int i,
+                                 const FingerPoints<Types>& points, const typename Types::Vec& p,
+                                 const typename Types::Vec& v, bool force_active,
+                                 ControllerState<Types>& st, const TickScratch<Types>& sc,
+                                 typename Types::FingerOutput& fo) noexcept {
+  using Scalar = typename Types::ScalarType;
+  FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+  const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
+  points.jacobian(p, m.jacobian);
+  fo.desired_contact_velocity = v;
+  fo.desired_normal_force = force_active ? sc.forces.grip * sc.pattern(i) : Scalar(0);
+  fo.force_target = force_active ? sc.forces.target(i) : Scalar(0);
+  using Vec = typename Types::Vec;
+  Vec force = Vec::Zero();
+  if (force_active) force = -sc.forces.velocity(i) * sc.normals.col(i);
+  const ControllerWarning w =
+      m.layer3.command(m.jacobian, v, f.contact.normal, force_active ? &force : nullptr,
+                       t.config.max_joint_acceleration, t.dt, fo);
+  m.last_motion = fo.servo.motion;
+  fo.stiffness_estimate = st.forces.stiffness_estimate()(i);
+  fo.force_integral = st.forces.integral()(i);
+  fo.slipping = sc.forces.slipping(i) != 0;
+  fo.state = m.state;
+  return w;
+}
+
+template <typename Types>
+void remember_contact(FingerMemory<Types>& m, const typename Types::TactileContact& c,
+                      const typename Types::PoseT& object) noexcept {
+  m.last_contact_object = object.rotation.transpose() * (c.contact_point - object.position);
+  m.last_normal_object = object.rotation.transpose() * c.normal;
+}
+
+}  // namespace detail
+
+/// Grasp phase (grasp.hpp): approach, press with the nominal force, settle.
+template <typename Types>
+ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& st,
+                             TickScratch<Types>& sc, typename Types::Output& out) noexcept {
+  using Scalar = typename Types::ScalarType;
+  const GraspParams<Scalar>& g = t.config.grasp;
+  const Scalar f0 = t.config.force_planner.nominal_force;
+  ControllerWarning w = out.warnings;
+  sc.pattern.setConstant(f0);
+  detail::run_force_layer(t, false, st, sc);
+  bool all_placed = true;
+  for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {
+    FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+    const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
+    typename Types::FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
+    const FingerPoints<Types> points(t.config.fingers[static_cast<std::size_t>(i)], f,
+                                     m.kinematics);
+    fo.implausible_contact = points.implausible_contact(t.config.contact_tolerance);
+    if (fo.implausible_contact) w |= ControllerWarning::implausible_contact;
+    if (f.contact.touching) {
+      if (m.state == FingerState::approaching) m.layer3.servo.reset_force();
+      m.state = FingerState::pressing;
+      detail::remember_contact(m, f.contact, t.object);
+      const PressStep<Scalar, Types::kDim> press =
+          press_step(g, m.target, f.contact.contact_point, f.contact.normal, t.dt, m.settle);
+      w |= detail::command_finger(t, i, points, points.centre(), press.velocity, true, st, sc, fo);
+      all_placed = all_placed && std::abs(m.force_gate.force() - f0) <= g.force_tolerance * f0 &&
+                   press.placed;
+    } else {
+      if (m.state == FingerState::pressing) m.layer3.servo.reset_force();
+      m.state = FingerState::approaching;
+      const typename Types::Vec p_v = points.virtual_point(m.target.normal);
+      const typename Types::Vec v =
+          approach_velocity(g, p_v, m.target.contact_point, m.target.normal);
+      w |= detail::command_finger(t, i, points, p_v, v, false, st, sc, fo);
+      all_placed = false;
+    }
+  }
+  out.warnings = w;
+  out.desired_object_pose = t.object;
+  out.commanded_twist.setZero();
+  out.feedforward_twist.setZero();
+  out.pose_error.setZero();
+  st.settled_time = all_placed ? st.settled_time + t.dt : Scalar(0);
+  if (st.settled_time >= g.settle_time) st.phase = ControllerPhase::grasped;
+  return st.phase == ControllerPhase::grasped ? ControllerStatus::grasped
+                                              : ControllerStatus::grasping;
+}
+
+/// Manipulation phase: layer 1 (trajectory, pose loop), layer 2 (contact velocities,
+/// force planner, force layer), layer 3 per finger; lost contacts are re-approached.
+template <typename Types>
+ControllerStatus manipulation_phase(
+    const TickInput<Types>& t,
+    const ObjectTrajectory<typename Types::ScalarType, Types::kDim>& trajectory,
+    ControllerState<Types>& st, TickScratch<Types>& sc, typename Types::Output& out) noexcept {
+  using Scalar = typename Types::ScalarType;
+  using Vec = typename Types::Vec;
+  ControllerWarning w = out.warnings;
+  const int n = static_cast<int>(st.fingers.size());
+  // Layer 1: desired pose, commanded twist.
+  st.manipulation_time += t.dt;
+  const TrajectorySample<Scalar, Types::kDim> sample = trajectory.evaluate(st.manipulation_time);
+  out.desired_object_pose = sample.pose;
+  out.feedforward_twist = sample.twist;
+  out.segment = sample.segment;
+  out.manipulation_time = st.manipulation_time;
+  const PoseLoopStep<Scalar, Types::kDim> pose =
+      st.pose_loop.update(t.config.pose_feedback, sample.pose, sample.twist, t.object, t.dt);
+  if (pose.integral_limited) w |= ControllerWarning::pose_integral_limited;
+  if (pose.twist_limited) w |= ControllerWarning::twist_limited;
+  out.pose_error = pose.pose_error;
+  out.commanded_twist = pose.commanded_twist;
+  out.pose_error_integral = st.pose_loop.integral();
+  // Layer 2: the planner's force pattern, then the force layer.
+  for (int i = 0; i < n; ++i) {
+    const typename Types::TactileContact& c = t.in.fingers[static_cast<std::size_t>(i)].contact;
+    sc.touching(i) = c.touching ? 1 : 0;
+    if (c.touching) sc.normals.col(i) = c.normal.normalized();
+  }
+  out.force_plan_status =
+      st.planner.plan(sc.touching, sc.normals, t.dt, sc.pattern, out.force_residual);
+  if (has(out.force_plan_status, ForcePlanStatus::limited)) w |= ControllerWarning::force_limited;
+  if (has(out.force_plan_status, ForcePlanStatus::no_balancing_contact))
+    w |= ControllerWarning::no_balancing_contact;
+  detail::run_force_layer(t, true, st, sc);
+  out.load_estimate = sc.forces.load;
+  out.grip = sc.forces.grip;
+  out.force_layer_status = sc.forces.status;
+  const ForceLayerStatus fs = sc.forces.status;
+  if (has(fs, ForceLayerStatus::slipping)) w |= ControllerWarning::slipping;
+  if (has(fs, ForceLayerStatus::grip_raised)) w |= ControllerWarning::grip_raised;
+  if (has(fs, ForceLayerStatus::beyond_capacity)) w |= ControllerWarning::beyond_capacity;
+  if (has(fs, ForceLayerStatus::integral_limited)) w |= ControllerWarning::force_integral_limited;
+  // Layers 2-3 per finger.
+  bool lost = false;
+  for (int i = 0; i < n; ++i) {
+    FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+    const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
+    typename Types::FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
+    const FingerPoints<Types> points(t.config.fingers[static_cast<std::size_t>(i)], f,
+                                     m.kinematics);
+    fo.implausible_contact = points.implausible_contact(t.config.contact_tolerance);
+    if (fo.implausible_contact) w |= ControllerWarning::implausible_contact;
+    if (f.contact.touching) {
+      if (m.state == FingerState::reacquiring) m.layer3.servo.reset_force();
+      m.state = FingerState::in_contact;
+      detail::remember_contact(m, f.contact, t.object);
+      const Vec v = contact_point_velocity<Scalar, Types::kDim>(
+          pose.commanded_twist, f.contact.contact_point, t.object.position);
+      w |= detail::command_finger(t, i, points, f.contact.contact_point, v, true, st, sc, fo);
+    } else {
+      lost = true;
+      if (m.state != FingerState::reacquiring) m.layer3.servo.reset_force();
+      m.state = FingerState::reacquiring;
+      // Aim at the last contact point carried with the measured object, along the
+      // last normal; add the object's motion there (eq. 2) so the finger keeps up.
+      const Vec nrm = t.object.rotation * m.last_normal_object;
+      const Vec p_t = t.object.transform_point(m.last_contact_object);
+      const Vec p_v = points.virtual_point(nrm);
+      const Vec v =
+          approach_velocity(t.config.grasp, p_v, p_t, nrm) +
+          contact_point_velocity<Scalar, Types::kDim>(pose.commanded_twist, p_t, t.object.position);
+      w |= detail::command_finger(t, i, points, p_v, v, false, st, sc, fo);
+    }
+  }
+  out.warnings = w;
+  return lost ? ControllerStatus::contact_lost : ControllerStatus::ok;
+}
+
+}  // namespace inhand

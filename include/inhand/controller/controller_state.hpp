@@ -1,0 +1,121 @@
+// What the controller remembers from one tick to the next (ControllerState), and the
+// preallocated per-tick workspace (TickScratch) that carries values between the steps
+// of one tick without allocating. The state is copied before every tick and put back
+// if the tick produces a non-finite value (reactive_controller.hpp); the scratch is
+// rewritten every tick before it is read. Units as in controller_io.hpp.
+#pragma once
+
+#include "inhand/controller/controller_io.hpp"
+#include "inhand/controller/finger_command.hpp"
+#include "inhand/controller/force_layer.hpp"
+#include "inhand/controller/force_planner.hpp"
+#include "inhand/controller/grasp.hpp"
+#include "inhand/controller/pose_feedback.hpp"
+#include "inhand/controller/sensor_gates.hpp"
+
+namespace inhand {
+
+/// Controller phase: configure() -> idle; start_grasp() -> grasping; the grasp completes
+/// -> grasped; start_manipulation() -> manipulating.
+enum class ControllerPhase : unsigned char { idle, grasping, grasped, manipulating };
+
+/// One finger's memory.
+template <typename Types>
+struct FingerMemory {
+  using Scalar = typename Types::ScalarType;
+  using Vec = typename Types::Vec;
+  FingerKinematics<typename Types::Chain> kinematics{};  ///< forward kinematics workspace
+  FingerServo<Scalar, Types::kDim, Types::kDof, Types::kMaxDof> layer3{};
+  /// The Jacobian of the point servoed on the last tick: this tick's measured advance
+  /// of the fingertip is J (q - q_prev).
+  typename Types::Jacobian jacobian{};
+  typename Types::JointVector q_prev{};  ///< rad, joint positions of the last tick
+  bool has_q_prev = false;
+  Vec last_motion = Vec::Zero();  ///< m/s, the last tick's motion part of the command
+  GraspTarget<Scalar, Types::kDim> target{};
+  FingerState state = FingerState::idle;
+  SettleWindow<Scalar, Types::kDim> settle{};
+  ForceGate<Scalar> force_gate{};
+  Vec last_contact_object = Vec::Zero();  ///< m, last contact point, object frame
+  Vec last_normal_object = Vec::UnitX();  ///< last outward normal, object frame
+};
+
+template <typename Types>
+struct ControllerState {
+  using Scalar = typename Types::ScalarType;
+  static constexpr int Dim = Types::kDim;
+  detail::FingerArray<FingerMemory<Types>, Types::kNumFingers> fingers{};
+  ForcePlanner<Scalar, Dim, Types::kNumFingers> planner{};
+  ForceLayer<Scalar, Dim, Types::kNumFingers> forces{};
+  ControllerPhase phase = ControllerPhase::idle;
+  double last_time = 0.0;  ///< s, the time base (see Input::time)
+  bool has_time = false;
+  Scalar settled_time = Scalar(0);       ///< s the grasp criterion has held
+  Scalar manipulation_time = Scalar(0);  ///< s since start_manipulation
+  PoseLoop<Scalar, Dim> pose_loop{};
+  PoseGate<Scalar, Dim> pose_gate{};
+
+  /// Sizes every part for the configuration (allocates only for run-time sizes).
+  void size_for(const typename Types::Config& c) {
+    const int n = static_cast<int>(c.fingers.size());
+    if constexpr (Types::kNumFingers == Dynamic) fingers.resize(static_cast<std::size_t>(n));
+    planner.resize(n);
+    planner.set_params(c.force_planner);
+    forces.set_params(c.force_layer);
+    forces.resize(n);
+    for (int i = 0; i < n; ++i) {
+      const typename Types::FingerConfig& fc = c.fingers[static_cast<std::size_t>(i)];
+      FingerMemory<Types>& m = fingers[static_cast<std::size_t>(i)];
+      m.kinematics.joint_origins.setZero(Dim, fc.chain.dof());
+      m.kinematics.joint_axes.setZero(3, fc.chain.dof());
+      m.layer3.configure(fc.chain.velocity_limits(), c.servo, c.ik);
+      m.jacobian.setZero(Dim, fc.chain.dof());
+      m.q_prev.setZero(fc.chain.dof());
+      planner.set_role(i, fc.role);
+    }
+  }
+  /// Back to idle: integrators, filters, grasp and trajectory progress cleared.
+  void reset() noexcept {
+    phase = ControllerPhase::idle;
+    has_time = false;
+    settled_time = manipulation_time = Scalar(0);
+    pose_loop.reset();
+    pose_gate.reset();
+    planner.reset();
+    forces.reset();
+    for (FingerMemory<Types>& m : fingers) {
+      m.layer3.servo.reset();
+      m.layer3.last_command.setZero();
+      m.state = FingerState::idle;
+      m.has_q_prev = false;
+      m.last_motion.setZero();
+      m.force_gate.reset();
+    }
+  }
+};
+
+template <typename Types>
+struct TickScratch {
+  using Planner = ForcePlanner<typename Types::ScalarType, Types::kDim, Types::kNumFingers>;
+  using Forces = ForceLayer<typename Types::ScalarType, Types::kDim, Types::kNumFingers>;
+  typename Planner::Mask touching{};
+  typename Planner::Normals normals{};       ///< unit outward normals of the touching
+  typename Planner::Normals points{};        ///< m, contact points of the touching
+  typename Planner::ForceVector pattern{};   ///< N, the planner's pattern q
+  typename Planner::ForceVector measured{};  ///< N, gated normal forces
+  typename Planner::ForceVector advance{};   ///< m, measured normal advance this tick
+  typename Forces::Result forces{};
+  void resize(int n) {
+    touching = Planner::Mask::Zero(n);
+    normals = Planner::Normals::Zero(Types::kDim, n);
+    points = Planner::Normals::Zero(Types::kDim, n);
+    pattern = Planner::ForceVector::Zero(n);
+    measured = Planner::ForceVector::Zero(n);
+    advance = Planner::ForceVector::Zero(n);
+    forces.velocity.setZero(n);
+    forces.target.setZero(n);
+    forces.slipping.setZero(n);
+  }
+};
+
+}  // namespace inhand

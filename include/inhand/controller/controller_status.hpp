@@ -1,0 +1,114 @@
+// What one ReactiveController::update() reports besides its command: the overall
+// status, the input field a rejected tick names, and the warnings of a valid tick
+// (bit flags; see reactive_controller.hpp for the contract each one belongs to).
+#pragma once
+
+#include "inhand/math/flags.hpp"
+
+namespace inhand {
+
+/// Overall result of one update().
+enum class ControllerStatus : unsigned char {
+  ok,               ///< manipulating, every finger in contact
+  grasping,         ///< grasp phase running
+  grasped,          ///< grasp complete: every finger presses with the nominal force
+  contact_lost,     ///< manipulating, at least one finger is reacquiring its contact
+  idle,             ///< configured, no task started: zero output
+  not_configured,   ///< configure() has not succeeded: zero output
+  invalid_input,    ///< see ControllerOutput::fault; zero output, state frozen
+  numerical_fault,  ///< a non-finite value arose (Output::numerical_fault names where);
+                    ///< zero output, state as before the tick
+};
+inline const char* to_string(ControllerStatus s) noexcept {
+  switch (s) {
+    case ControllerStatus::ok:
+      return "ok";
+    case ControllerStatus::grasping:
+      return "grasping";
+    case ControllerStatus::grasped:
+      return "grasped";
+    case ControllerStatus::contact_lost:
+      return "contact_lost";
+    case ControllerStatus::idle:
+      return "idle";
+    case ControllerStatus::not_configured:
+      return "not_configured";
+    case ControllerStatus::invalid_input:
+      return "invalid_input";
+    case ControllerStatus::numerical_fault:
+      return "numerical_fault";
+  }
+  return "unknown";
+}
+
+/// Which input field was rejected.
+enum class InputField : unsigned char {
+  none,
+  time,
+  object_pose,
+  joint_positions,
+  contact_point,
+  contact_normal,
+  normal_force,
+  jacobian,
+  virtual_contact_point,
+  finger_count,             ///< Input::fingers or Output::fingers has the wrong size
+  output_joint_velocities,  ///< an Output finger's joint_velocities is not its DOF long
+};
+inline const char* to_string(InputField f) noexcept {
+  switch (f) {
+    case InputField::none:
+      return "none";
+    case InputField::time:
+      return "time";
+    case InputField::object_pose:
+      return "object_pose";
+    case InputField::joint_positions:
+      return "joint_positions";
+    case InputField::contact_point:
+      return "contact_point";
+    case InputField::contact_normal:
+      return "contact_normal";
+    case InputField::normal_force:
+      return "normal_force";
+    case InputField::jacobian:
+      return "jacobian";
+    case InputField::virtual_contact_point:
+      return "virtual_contact_point";
+    case InputField::finger_count:
+      return "finger_count";
+    case InputField::output_joint_velocities:
+      return "output_joint_velocities";
+  }
+  return "unknown";
+}
+
+struct InputFault {
+  InputField field = InputField::none;
+  int finger = -1;  ///< -1 for hand-level fields (time, object pose, finger_count)
+};
+
+/// Warnings raised during a valid tick (bit flags, never silent saturation).
+enum class ControllerWarning : unsigned {
+  none = 0,
+  ik_damped = 1u << 0,               ///< some finger's IK was damped near a singularity
+  joint_velocity_limited = 1u << 1,  ///< some finger's joint velocities were scaled down
+  servo_saturated = 1u << 2,         ///< some servo PI hit its integral/output limit
+  force_limited = 1u << 3,           ///< the planner limited a balancing force
+  twist_limited = 1u << 4,           ///< the commanded object twist was scaled to its limit
+  long_tick = 1u << 5,               ///< dt exceeded max_tick: integration used max_tick
+  no_balancing_contact = 1u << 6,    ///< no balancing finger touching: forces unbalanced
+  rate_limited = 1u << 7,   ///< some finger's command change was scaled to max_joint_acceleration
+  pose_outlier = 1u << 8,   ///< the measured object pose jumped implausibly: previous one held
+  force_outlier = 1u << 9,  ///< a measured normal force jumped implausibly: previous one held
+  slipping = 1u << 10,      ///< some contact slides along the object (force layer)
+  grip_raised = 1u << 11,   ///< the grip is above the nominal pattern (force layer)
+  beyond_capacity = 1u << 12,  ///< the load needs more than max_force: the object may be lost
+  force_integral_limited = 1u << 13,  ///< some force integrator reached its bound
+  pose_integral_limited = 1u << 14,   ///< layer 1's pose-error integral reached its bound
+  implausible_contact = 1u << 15,     ///< some contact is far from / behind its fingertip
+};
+template <>
+struct is_flags<ControllerWarning> : std::true_type {};
+
+}  // namespace inhand

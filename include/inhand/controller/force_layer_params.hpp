@@ -1,0 +1,76 @@
+// Parameters and status flags of the force layer (force_layer.hpp; docs/force_layer.md
+// gives each parameter's role, range and the figures measured with the defaults).
+// Units: SI; rates in 1/s, bandwidths in rad/s. Field names in Validation are relative to
+// the controller Config ("force_layer.bandwidth").
+#pragma once
+
+#include <limits>
+
+#include "inhand/math/flags.hpp"
+#include "inhand/math/status.hpp"
+#include "inhand/math/types.hpp"
+
+namespace inhand {
+
+template <typename Scalar>
+struct ForceLayerParams {
+  Scalar bandwidth = Scalar(40);               ///< w_c [rad/s], crossover of each force loop
+  Scalar integral_corner = Scalar(10);         ///< w_i [rad/s], PI zero; 0: proportional only
+  Scalar min_stiffness = Scalar(200);          ///< [N/m], lower bound of the estimate
+  Scalar max_stiffness = Scalar(1e5);          ///< [N/m], upper bound and initial estimate
+  Scalar stiffness_window = Scalar(0.2);       ///< [s], estimator memory
+  Scalar min_excitation = Scalar(1e-5);        ///< [m], std of the advance needed to update
+  Scalar min_fit = Scalar(0.9);                ///< r^2 of the fit needed to update, in (0, 1]
+  Scalar max_integral_velocity = Scalar(0.1);  ///< [m/s], bound on (w_c / k) w_i z
+  Scalar slip_distance = Scalar(3e-4);         ///< [m], see the file comment
+  Scalar grip_rise_rate = Scalar(5);           ///< [1/s], rise of s while slipping
+  Scalar friction_margin = Scalar(1.5);        ///< >= 1, grip after a slip onset / grip at onset
+  Scalar grip_decay_time = Scalar(20);         ///< [s], s_slip back to 1 once the slip stops
+  Scalar rigid_tolerance = Scalar(1e-3);       ///< eps, dimensionless (see the file comment)
+
+  Validation validate() const noexcept {
+    const Scalar inf = std::numeric_limits<Scalar>::infinity();
+    struct Field {
+      const char* name;
+      Scalar value, lo, hi;
+      bool lo_open;
+    };
+    const Field fields[] = {
+        {"force_layer.bandwidth", bandwidth, Scalar(0), inf, true},
+        {"force_layer.integral_corner", integral_corner, Scalar(0), inf, false},
+        {"force_layer.min_stiffness", min_stiffness, Scalar(0), inf, true},
+        {"force_layer.max_stiffness", max_stiffness, min_stiffness, inf, false},
+        {"force_layer.stiffness_window", stiffness_window, Scalar(0), inf, true},
+        {"force_layer.min_excitation", min_excitation, Scalar(0), inf, true},
+        {"force_layer.min_fit", min_fit, Scalar(0), Scalar(1) + Scalar(1e-12), true},
+        {"force_layer.max_integral_velocity", max_integral_velocity, Scalar(0), inf, true},
+        {"force_layer.slip_distance", slip_distance, Scalar(0), inf, true},
+        {"force_layer.grip_rise_rate", grip_rise_rate, Scalar(0), inf, false},
+        {"force_layer.friction_margin", friction_margin, Scalar(1), inf, false},
+        {"force_layer.grip_decay_time", grip_decay_time, Scalar(0), inf, true},
+        {"force_layer.rigid_tolerance", rigid_tolerance, Scalar(0), inf, true},
+    };
+    for (const Field& f : fields) {
+      const bool ok =
+          is_finite(f.value) && (f.lo_open ? f.value > f.lo : f.value >= f.lo) && f.value < f.hi;
+      if (!ok)
+        return Validation::invalid(
+            f.name, f.lo_open ? "must be finite and > its lower bound (see the header)"
+                              : "must be finite and >= its lower bound (see the header)");
+    }
+    return Validation::valid();
+  }
+};
+
+/// What the force layer reports each tick (bit flags).
+enum class ForceLayerStatus : unsigned {
+  ok = 0,
+  slipping = 1u << 0,          ///< some finger's contact slides along the object
+  grip_raised = 1u << 1,       ///< s > 1: the grip is above the nominal pattern
+  beyond_capacity = 1u << 2,   ///< the load needs more than max_force (or min_force is unreachable)
+  integral_limited = 1u << 3,  ///< some force integrator reached max_integral_velocity
+};
+template <>
+struct is_flags<ForceLayerStatus> : std::true_type {};
+
+}  // namespace inhand

@@ -1,0 +1,111 @@
+// Layer 2: the grasp map of the touching fingers' normal forces, and the split of the
+// normal-force space into rigid and internal parts (docs/method.md section 5,
+// docs/force_layer.md).
+//
+// Frames, units, signs: world frame, SI. n_i is the object's OUTWARD unit normal at
+// finger i's contact, p_i the contact point, p_o the object's reference point. Row i
+// of A (NumFingers x W, W = 6 in 3-D, 3 in the plane) is
+//   [n_i^T, ((p_i - p_o) x n_i)^T / L]
+// (zero for a finger that does not touch), L the RMS lever arm of the touching
+// contacts (bounded below by 1e-6 m), so both halves are dimensionless. A^T f is the
+// wrench of normal forces f (force; torque / L); A V is the normal velocity at the
+// contacts of the object's material points for the twist V.
+//   rigid    : range(A)   -- forces with a resultant wrench on the object
+//   internal : null(A^T)  -- squeezing that leaves the object in equilibrium
+//   P_int = I - A (A^T A + eps I)^-1 A^T   (eps > 0 keeps it defined when A is
+//                                           rank-deficient: fewer than W contacts)
+// build() factorises A^T A + eps I once per tick; project_internal() then costs two
+// small products and a W x W solve. noexcept; fixed finger counts never allocate.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+#include "inhand/math/types.hpp"
+
+namespace inhand {
+
+template <typename Scalar, int Dim, int NumFingers>
+class GraspMap {
+ public:
+  static constexpr int W = SpatialDim<Dim>::kTwist;  ///< wrench size
+  static constexpr int R = SpatialDim<Dim>::kRot;
+  using ForceVector = Eigen::Matrix<Scalar, NumFingers, 1>;
+  using Points = Eigen::Matrix<Scalar, Dim, NumFingers>;  ///< one column per finger
+  using Mask = Eigen::Matrix<unsigned char, NumFingers, 1>;
+  using Wrench = Eigen::Matrix<Scalar, W, 1>;  ///< (force; torque about p_o)
+  using Vec = Vector<Scalar, Dim>;
+
+  /// Sizes the map (allocates only for a run-time finger count).
+  void resize(int fingers) {
+    a_.setZero(fingers, W);
+    // A factorisation in a defined state (an uncomputed Eigen::LDLT holds indeterminate
+    // members, which copying the map would read).
+    ldlt_.compute(Eigen::Matrix<Scalar, W, W>::Identity());
+  }
+
+  /// Builds A for the touching fingers (columns of `points` / `normals` of the others
+  /// are ignored) and factorises A^T A + eps I.
+  void build(const Mask& touching, const Points& points, const Points& normals,
+             const Vec& object_position, Scalar eps) noexcept {
+    const int n = static_cast<int>(a_.rows());
+    Scalar sum = Scalar(0);
+    int k = 0;
+    for (int i = 0; i < n; ++i) {
+      if (!touching(i)) continue;
+      sum += (points.col(i) - object_position).squaredNorm();
+      ++k;
+    }
+    lever_ = k > 0 ? std::sqrt(sum / Scalar(k)) : Scalar(0);
+    if (!(lever_ > Scalar(1e-6))) lever_ = Scalar(1e-6);
+    for (int i = 0; i < n; ++i) {
+      if (!touching(i)) {
+        a_.row(i).setZero();
+        continue;
+      }
+      const Vec nrm = normals.col(i);
+      a_.row(i).template head<Dim>() = nrm.transpose();
+      a_.row(i).template tail<R>() =
+          (moment(Vec(points.col(i) - object_position), nrm) / lever_).transpose();
+    }
+    Eigen::Matrix<Scalar, W, W> m;
+    m.noalias() = a_.transpose() * a_;
+    m.diagonal().array() += eps;
+    ldlt_.compute(m);
+  }
+
+  /// x <- P_int x.
+  void project_internal(ForceVector& x) const noexcept {
+    Wrench w;
+    w.noalias() = a_.transpose() * x;
+    const Wrench y = ldlt_.solve(w);
+    x.noalias() -= a_ * y;
+  }
+
+  /// The wrench (force N; torque N m about p_o) that normal forces f balance:
+  /// sum f_i [n_i; (p_i - p_o) x n_i].
+  Wrench balanced_wrench(const ForceVector& f) const noexcept {
+    Wrench w;
+    w.noalias() = a_.transpose() * f;
+    w.template tail<R>() *= lever_;
+    return w;
+  }
+
+  Scalar lever() const noexcept { return lever_; }  ///< L [m]
+
+ private:
+  static AngularVector<Scalar, Dim> moment(const Vector<Scalar, 3>& r,
+                                           const Vector<Scalar, 3>& n) noexcept {
+    return r.cross(n);
+  }
+  static AngularVector<Scalar, Dim> moment(const Vector<Scalar, 2>& r,
+                                           const Vector<Scalar, 2>& n) noexcept {
+    return AngularVector<Scalar, Dim>(r.x() * n.y() - r.y() * n.x());
+  }
+
+  Eigen::Matrix<Scalar, NumFingers, W> a_;
+  Eigen::LDLT<Eigen::Matrix<Scalar, W, W>> ldlt_;
+  Scalar lever_ = Scalar(1);
+};
+
+}  // namespace inhand

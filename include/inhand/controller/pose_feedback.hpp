@@ -1,0 +1,123 @@
+// Layer 1: the commanded object twist from the desired and the measured object pose
+// (docs/method.md section 3).
+//
+//   e = pose_error(X_d, X_measured)            (position m; rotation vector rad, world)
+//   I <- I + dt e, each part's norm bounded    (m s; rad s; anti-windup, direction kept)
+//   V = V_ff + K_p e + K_i I                   (per part: position / orientation gains)
+//   V <- V * min(1, v_max / |v|, w_max / |w|)  (the whole twist scaled: screw axis kept)
+// Twists are (linear velocity of the object's reference point; angular velocity), world
+// frame; in the plane the angular part is a scalar. Equilibrium: e = 0 with K_i I equal
+// to whatever steady twist the lower layers fail to realise; the integrator I owns the
+// rigid directions of the object's motion (the force layer's loops own only the
+// internal ones: docs/force_layer.md). noexcept, no allocation.
+#pragma once
+
+#include <algorithm>
+#include <limits>
+
+#include "inhand/math/pose.hpp"
+#include "inhand/math/status.hpp"
+
+namespace inhand {
+
+/// Gains and bounds of layer 1's pose loop (field names relative to the controller
+/// Config, "pose_feedback.position_gain").
+template <typename Scalar>
+struct PoseFeedback {
+  Scalar position_gain = Scalar(8);        ///< 1/s
+  Scalar orientation_gain = Scalar(8);     ///< 1/s
+  Scalar max_linear_speed = Scalar(0.05);  ///< m/s, bound on the commanded linear velocity
+  Scalar max_angular_speed = Scalar(1.0);  ///< rad/s
+  /// Integral action on the pose error (1/s^2): removes the steady offset left where
+  /// the force servos' integrators balance the proportional pose feedback.
+  Scalar position_integral_gain = Scalar(10);
+  Scalar orientation_integral_gain = Scalar(10);
+  /// Bounds on the integrated pose error (m s and rad s), anti-windup: the norm of
+  /// each part is scaled down to its bound (direction kept) and the warning
+  /// pose_integral_limited is raised. The defaults let the integral term add at most
+  /// position_integral_gain * 2e-3 = 0.02 m/s and orientation_integral_gain * 2e-2 =
+  /// 0.2 rad/s, i.e. 40 % and 20 % of the default speed bounds.
+  Scalar position_integral_limit = Scalar(2e-3);
+  Scalar orientation_integral_limit = Scalar(2e-2);
+  Validation validate() const noexcept {
+    if (!is_finite(position_integral_gain) || position_integral_gain < Scalar(0))
+      return Validation::invalid("pose_feedback.position_integral_gain", "must be finite and >= 0");
+    if (!is_finite(orientation_integral_gain) || orientation_integral_gain < Scalar(0))
+      return Validation::invalid("pose_feedback.orientation_integral_gain",
+                                 "must be finite and >= 0");
+    if (!is_finite(position_integral_limit) || !(position_integral_limit > Scalar(0)))
+      return Validation::invalid("pose_feedback.position_integral_limit", "must be finite and > 0");
+    if (!is_finite(orientation_integral_limit) || !(orientation_integral_limit > Scalar(0)))
+      return Validation::invalid("pose_feedback.orientation_integral_limit",
+                                 "must be finite and > 0");
+    if (!is_finite(position_gain) || position_gain < Scalar(0))
+      return Validation::invalid("pose_feedback.position_gain", "must be finite and >= 0");
+    if (!is_finite(orientation_gain) || orientation_gain < Scalar(0))
+      return Validation::invalid("pose_feedback.orientation_gain", "must be finite and >= 0");
+    if (!(max_linear_speed > Scalar(0)))
+      return Validation::invalid("pose_feedback.max_linear_speed", "must be > 0");
+    if (!(max_angular_speed > Scalar(0)))
+      return Validation::invalid("pose_feedback.max_angular_speed", "must be > 0");
+    return Validation::valid();
+  }
+};
+
+/// What one pose-loop step gives: the pose error, the commanded twist and which bound
+/// acted.
+template <typename Scalar, int Dim>
+struct PoseLoopStep {
+  Twist<Scalar, Dim> pose_error = Twist<Scalar, Dim>::Zero();
+  Twist<Scalar, Dim> commanded_twist = Twist<Scalar, Dim>::Zero();
+  bool integral_limited = false;  ///< a part of the integral was scaled to its bound
+  bool twist_limited = false;     ///< the twist was scaled to the speed bounds
+};
+
+/// The pose loop's state: the integral I of the pose error.
+template <typename Scalar, int Dim>
+class PoseLoop {
+ public:
+  using TwistT = Twist<Scalar, Dim>;
+
+  void reset() noexcept { integral_.setZero(); }
+  const TwistT& integral() const noexcept { return integral_; }  ///< (m s; rad s)
+
+  /// One tick: desired pose and feed-forward twist, measured pose, dt > 0 [s].
+  PoseLoopStep<Scalar, Dim> update(const PoseFeedback<Scalar>& pf, const Pose<Scalar, Dim>& desired,
+                                   const TwistT& feedforward, const Pose<Scalar, Dim>& measured,
+                                   Scalar dt) noexcept {
+    constexpr int R = SpatialDim<Dim>::kRot;
+    PoseLoopStep<Scalar, Dim> out;
+    out.pose_error = pose_error(desired, measured);
+    integral_ += dt * out.pose_error;
+    const Scalar ip = integral_.template head<Dim>().norm();
+    if (ip > pf.position_integral_limit) {
+      integral_.template head<Dim>() *= pf.position_integral_limit / ip;
+      out.integral_limited = true;
+    }
+    const Scalar ir = integral_.template tail<R>().norm();
+    if (ir > pf.orientation_integral_limit) {
+      integral_.template tail<R>() *= pf.orientation_integral_limit / ir;
+      out.integral_limited = true;
+    }
+    TwistT V = feedforward;
+    V.template head<Dim>() += pf.position_gain * out.pose_error.template head<Dim>() +
+                              pf.position_integral_gain * integral_.template head<Dim>();
+    V.template tail<R>() += pf.orientation_gain * out.pose_error.template tail<R>() +
+                            pf.orientation_integral_gain * integral_.template tail<R>();
+    const Scalar lin = V.template head<Dim>().norm(), ang = V.template tail<R>().norm();
+    Scalar scale = Scalar(1);
+    if (lin > pf.max_linear_speed) scale = pf.max_linear_speed / lin;
+    if (ang > pf.max_angular_speed) scale = std::min(scale, pf.max_angular_speed / ang);
+    if (scale < Scalar(1)) {
+      V *= scale;
+      out.twist_limited = true;
+    }
+    out.commanded_twist = V;
+    return out;
+  }
+
+ private:
+  TwistT integral_ = TwistT::Zero();
+};
+
+}  // namespace inhand

@@ -1,0 +1,129 @@
+// Plausibility gates on what is sensed: the measured object pose and each finger's
+// measured normal force (sensor faults: a vision outlier, a force spike). Part of the
+// controller's input stage; see OutlierGates for the rule. Units: m, rad, N, s.
+// noexcept, no allocation.
+#pragma once
+
+#include <cmath>
+#include <limits>
+
+#include "inhand/math/pose.hpp"
+#include "inhand/math/so3.hpp"
+#include "inhand/math/status.hpp"
+
+namespace inhand {
+
+/// Plausibility gates on the sensed data (sensor faults: a vision outlier, a force
+/// spike). A sample whose change since the last ACCEPTED one exceeds what the bound
+/// allows over the elapsed time is rejected: the last accepted value is used instead
+/// and the warning pose_outlier / force_outlier is raised. After
+/// `max_consecutive_rejections` rejections in a row the sample is accepted anyway, so
+/// a real jump (the object was knocked) is followed after that many ticks. Contacts
+/// that (re)start touching are always accepted. +infinity (the default) disables a gate.
+template <typename Scalar>
+struct OutlierGates {
+  Scalar max_object_speed = std::numeric_limits<Scalar>::infinity();          ///< m/s
+  Scalar max_object_angular_speed = std::numeric_limits<Scalar>::infinity();  ///< rad/s
+  Scalar max_force_rate = std::numeric_limits<Scalar>::infinity();            ///< N/s
+  int max_consecutive_rejections = 5;
+  Validation validate() const noexcept {
+    if (!(max_object_speed > Scalar(0)) || max_object_speed != max_object_speed)
+      return Validation::invalid("outlier_gates.max_object_speed", "must be > 0 (+inf disables)");
+    if (!(max_object_angular_speed > Scalar(0)) ||
+        max_object_angular_speed != max_object_angular_speed)
+      return Validation::invalid("outlier_gates.max_object_angular_speed",
+                                 "must be > 0 (+inf disables)");
+    if (!(max_force_rate > Scalar(0)) || max_force_rate != max_force_rate)
+      return Validation::invalid("outlier_gates.max_force_rate", "must be > 0 (+inf disables)");
+    if (max_consecutive_rejections < 0)
+      return Validation::invalid("outlier_gates.max_consecutive_rejections", "must be >= 0");
+    return Validation::valid();
+  }
+};
+
+/// The object-pose gate's state: the last accepted pose.
+template <typename Scalar, int Dim>
+class PoseGate {
+ public:
+  using PoseT = Pose<Scalar, Dim>;
+  struct Step {
+    PoseT pose{};          ///< the pose to use this tick (the measured or the held one)
+    bool outlier = false;  ///< the measured pose was rejected
+  };
+
+  /// Forgets the rejection count (the held pose stays until the next accepted one).
+  void reset() noexcept {
+    rejections_ = 0;
+    age_ = Scalar(0);
+  }
+  /// One tick, dt [s] since the last one; `first`: no pose accepted yet (always accepts).
+  Step update(const OutlierGates<Scalar>& g, const PoseT& measured, Scalar dt,
+              bool first) noexcept {
+    const Scalar elapsed = age_ + dt;
+    bool accept = first;
+    if (!accept) {
+      const Scalar dp = (measured.position - pose_.position).norm();
+      const Scalar dr = rotation_log<Scalar>(
+                            Rotation<Scalar, Dim>(measured.rotation * pose_.rotation.transpose()))
+                            .norm();
+      accept = dp <= g.max_object_speed * elapsed && dr <= g.max_object_angular_speed * elapsed;
+      if (!accept && rejections_ >= g.max_consecutive_rejections) accept = true;
+    }
+    if (accept) {
+      pose_ = measured;
+      rejections_ = 0;
+      age_ = Scalar(0);
+    } else {
+      ++rejections_;
+      age_ = elapsed;
+    }
+    return Step{pose_, !accept};
+  }
+  const PoseT& pose() const noexcept { return pose_; }  ///< the last accepted pose
+
+ private:
+  PoseT pose_{};
+  int rejections_ = 0;
+  Scalar age_ = Scalar(0);  ///< s since the last accepted pose
+};
+
+/// One finger's normal-force gate: the last accepted force.
+template <typename Scalar>
+class ForceGate {
+ public:
+  /// Back to "no force accepted yet".
+  void reset() noexcept {
+    valid_ = false;
+    rejections_ = 0;
+  }
+  /// One tick. A finger that does not touch clears the gate (the next touch is accepted
+  /// as it comes). Returns true when the reading was rejected (an outlier).
+  bool update(const OutlierGates<Scalar>& g, bool touching, Scalar reading, Scalar dt) noexcept {
+    if (!touching) {
+      valid_ = false;
+      return false;
+    }
+    const Scalar elapsed = age_ + dt;
+    const bool ok = !valid_ || std::abs(reading - force_) <= g.max_force_rate * elapsed ||
+                    rejections_ >= g.max_consecutive_rejections;
+    if (ok) {
+      force_ = reading;
+      valid_ = true;
+      rejections_ = 0;
+      age_ = Scalar(0);
+    } else {
+      ++rejections_;
+      age_ = elapsed;
+    }
+    return !ok;
+  }
+  Scalar force() const noexcept { return force_; }  ///< N, the force to use this tick
+
+ private:
+  Scalar force_ = Scalar(0);
+  bool valid_ = false;
+  int rejections_ = 0;
+  Scalar age_ = Scalar(0);  ///< s since the last accepted force
+};
+
+}  // namespace inhand
