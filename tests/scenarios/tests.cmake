@@ -16,7 +16,7 @@ set(INHAND_SCENARIOS_DIR ${PROJECT_SOURCE_DIR}/scenarios)
 add_executable(scenarios_scenario_json_check ${CMAKE_CURRENT_LIST_DIR}/scenario_json_check.cpp)
 target_include_directories(scenarios_scenario_json_check PRIVATE
   ${PROJECT_SOURCE_DIR}/examples ${PROJECT_SOURCE_DIR}/examples/scenario ${PROJECT_SOURCE_DIR}/tests)
-target_link_libraries(scenarios_scenario_json_check PRIVATE inhand::inhand inhand_warnings
+target_link_libraries(scenarios_scenario_json_check PRIVATE inhand::sim inhand_warnings
   nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
 target_compile_definitions(scenarios_scenario_json_check PRIVATE
   INHAND_SCENARIO_DIR="${INHAND_SCENARIOS_DIR}" INHAND_README="${PROJECT_SOURCE_DIR}/README.md")
@@ -43,7 +43,7 @@ if(INHAND_BUILD_EXAMPLES)
       COMMAND inhand_scenario ${file} --check --quiet --summary ${PROJECT_BINARY_DIR}/scenario-${name}.summary.json)
     # Label `long`: the scenarios that simulate 600 s or more (about 10 s optimised,
     # over 2 minutes under the sanitizers, whose stage leaves them out; the 120 s hold
-    # of tests/plant/force_layer_plant_test.cpp covers the same path there).
+    # of tests/sim/force_layer_plant_test.cpp covers the same path there).
     set(labels scenario)
     if(name MATCHES "_600s$")
       list(APPEND labels long)

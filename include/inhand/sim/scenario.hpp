@@ -13,7 +13,7 @@
 //                previous stage ended on, then `settle` seconds of hold.
 // The controller runs every `control_period` on sensed data (plant.sample_sensors(),
 // tactile(), measured_object_pose()); the plant integrates with its own smaller step.
-// Metrics: plant/metrics.hpp (true pose against desired, true forces against the
+// Metrics: sim/metrics.hpp (true pose against desired, true forces against the
 // plan, slip, contact losses after the grasp, drop).
 // Units SI, world frame.
 #pragma once
@@ -25,9 +25,9 @@
 #include <vector>
 
 #include "inhand/controller/reactive_controller.hpp"
-#include "inhand/plant/hand_plant.hpp"
-#include "inhand/plant/metrics.hpp"
-#include "inhand/plant/presets.hpp"
+#include "inhand/sim/hand_plant.hpp"
+#include "inhand/sim/metrics.hpp"
+#include "inhand/sim/presets.hpp"
 
 namespace inhand::plant {
 

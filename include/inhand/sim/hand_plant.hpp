@@ -69,7 +69,7 @@
 #include "inhand/kinematics/finger_chain.hpp"
 #include "inhand/math/pose.hpp"
 #include "inhand/math/so3.hpp"
-#include "inhand/plant/shapes.hpp"
+#include "inhand/sim/shapes.hpp"
 
 namespace inhand::plant {
 
