@@ -33,7 +33,7 @@
 
 #include "alloc_counter.hpp"
 #include "inhand/inhand.hpp"
-#include "inhand/plant/presets.hpp"
+#include "inhand/sim/presets.hpp"
 
 namespace inhand_bench {
 

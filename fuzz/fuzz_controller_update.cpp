@@ -35,7 +35,7 @@
 #include <vector>
 
 #include "inhand/controller/reactive_controller.hpp"
-#include "inhand/plant/presets.hpp"
+#include "inhand/sim/presets.hpp"
 
 namespace {
 

@@ -1,7 +1,7 @@
 // Closed-loop scenarios of the planar Box2D demo: the library's ReactiveController,
 // instantiated for the plane (Dim = 2, two fingers of three joints), driving the Box2D
 // hand of planar_world.hpp through the paper's stages, with the per-stage metrics of
-// inhand/plant/metrics.hpp. It follows inhand/plant/scenario.hpp tick for tick:
+// inhand/sim/metrics.hpp. It follows inhand/sim/scenario.hpp tick for tick:
 //   sensing (joint angles, object pose, tactile) -> controller.update() -> joint motor
 //   speeds -> world.step(control_period).
 // Stages:
@@ -13,7 +13,7 @@
 //                had at the start of the stage (the paper's stage 1).
 //   manipulate : the stage's trajectory segments from the desired pose the previous
 //                stage ended on, then `settle` seconds of hold.
-// Faults (FaultSpec, as in inhand/plant/scenario.hpp): sensing corruption applied to the
+// Faults (FaultSpec, as in inhand/sim/scenario.hpp): sensing corruption applied to the
 // controller's input before update(), a disturbance force on the object during the step;
 // each gets a FaultReport (detection, reacquisition, force-integral windup).
 // Units: see planar_world.hpp (1 u = 1 cm of the real hand, N, rad, s).
@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "inhand/controller/reactive_controller.hpp"
-#include "inhand/plant/metrics.hpp"
+#include "inhand/sim/metrics.hpp"
 #include "planar_world.hpp"
 
 namespace inhand::box2d_demo {
@@ -60,7 +60,7 @@ struct CommandOverride {
   JointVector joint_velocity = JointVector::Zero();  ///< rad/s
 };
 
-/// A fault injected into a run (the 3-D plant's FaultSpec, inhand/plant/scenario.hpp, in
+/// A fault injected into a run (the 3-D plant's FaultSpec, inhand/sim/scenario.hpp, in
 /// the plane). Active from `at` s into the stage named `stage` for `duration` s:
 ///   tactile_dropout : finger's tactile signal reads "not touching"
 ///   force_spike     : finger's sensed normal force += `magnitude` N (while touching)
@@ -470,7 +470,7 @@ class ScenarioRunner {
           }
         }
         // Injected faults: sensing corruption before the controller sees the data, the
-        // knock force during the step (as inhand/plant/scenario.hpp).
+        // knock force during the step (as inhand/sim/scenario.hpp).
         const double ts = t - stage_start;  // stage time at the start of this tick
         auto fault_active = [&](const FaultSpec& fs) {
           return fs.stage == st.name && ts + 1e-12 >= fs.at && ts + 1e-12 < fs.at + fs.duration;

@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "inhand/plant/scenario.hpp"
+#include "inhand/sim/scenario.hpp"
 
 namespace {
 

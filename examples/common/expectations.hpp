@@ -1,4 +1,4 @@
-// Expectations on the per-stage metrics of a run (inhand/plant/metrics.hpp), read from
+// Expectations on the per-stage metrics of a run (inhand/sim/metrics.hpp), read from
 // the "expect" object of a scenario file and checked after the run.
 //
 //   "expect": {
@@ -29,7 +29,7 @@
 #include <vector>
 
 #include "common/json_reader.hpp"
-#include "inhand/plant/metrics.hpp"
+#include "inhand/sim/metrics.hpp"
 
 namespace inhand::examples {
 

@@ -1,5 +1,5 @@
 // Summary of a run as JSON: the scenario name, the per-stage metrics
-// (inhand/plant/metrics.hpp) and the outcome of the expectations.
+// (inhand/sim/metrics.hpp) and the outcome of the expectations.
 //
 //   {
 //     "scenario": "cylinder_translate_x",
@@ -33,7 +33,7 @@
 
 #include "common/atomic_file.hpp"
 #include "common/json_reader.hpp"
-#include "inhand/plant/metrics.hpp"
+#include "inhand/sim/metrics.hpp"
 
 namespace inhand::examples {
 

@@ -22,8 +22,8 @@
 #include "common/expectations.hpp"
 #include "common/json_reader.hpp"
 #include "inhand/math/so3.hpp"
-#include "inhand/plant/presets.hpp"
-#include "inhand/plant/scenario.hpp"
+#include "inhand/sim/presets.hpp"
+#include "inhand/sim/scenario.hpp"
 
 namespace inhand::examples {
 

@@ -8,7 +8,11 @@
 #                     then run it
 #   ACTION=pkgconfig  as compile, with FLAGS taken from `PKG_CONFIG --cflags inhand`
 #                     (PKG_CONFIG_PATH = STAGE/DATADIR/pkgconfig); also checks the version
-#                     and that the include path is STAGE/INCLUDEDIR
+#                     and that the include path is STAGE/INCLUDEDIR. With STRICT=ON:
+#                     every other -I of those flags (Eigen's) becomes -isystem, inhand's
+#                     stays -I, and WARNING_FLAGS ('|'-separated, with -Werror) are added;
+#                     the compiler's warnings matching ALLOWED_WARNINGS (a regex; for
+#                     known warnings in headers being reworked) are shown, not errors
 #   ACTION=readme     README's block between <!-- tour:begin --> and <!-- tour:end -->
 #                     (without its ``` fences) must equal the file TOUR
 cmake_minimum_required(VERSION 3.16)
@@ -25,7 +29,22 @@ function(compile_and_run source output flags)
   get_filename_component(dir "${output}" DIRECTORY)
   file(REMOVE_RECURSE "${dir}")
   file(MAKE_DIRECTORY "${dir}")
-  run("${CXX_COMPILER}" ${flags} "${source}" -o "${output}")
+  if(NOT ALLOWED_WARNINGS)
+    run("${CXX_COMPILER}" ${flags} "${source}" -o "${output}")
+  else()
+    execute_process(COMMAND "${CXX_COMPILER}" ${flags} "${source}" -o "${output}"
+                    RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_VARIABLE out)
+    message("${out}${err}")
+    string(REGEX MATCHALL "[^\n]*warning:[^\n]*" warnings "${err}")
+    foreach(w IN LISTS warnings)
+      if(NOT w MATCHES "${ALLOWED_WARNINGS}")
+        message(FATAL_ERROR "warning not among the allowed ones: ${w}")
+      endif()
+    endforeach()
+    if(NOT rc EQUAL 0)
+      message(FATAL_ERROR "compile of ${source} failed (${rc})")
+    endif()
+  endif()
   run("${output}")
 endfunction()
 
@@ -81,6 +100,25 @@ elseif(ACTION STREQUAL "pkgconfig")
   endforeach()
   if(NOT found)
     message(FATAL_ERROR "pkg-config --cflags inhand (${cflags}) lacks -I${expected}")
+  endif()
+  if(STRICT)
+    # Eigen's headers are not ours to check: a system directory. inhand's stay -I.
+    set(strict_flags)
+    foreach(flag IN LISTS flags)
+      if(flag MATCHES "^-I(.+)$")
+        get_filename_component(dir "${CMAKE_MATCH_1}" REALPATH)
+        if(NOT dir STREQUAL expected)
+          set(flag "-isystem${CMAKE_MATCH_1}")
+        endif()
+      endif()
+      list(APPEND strict_flags "${flag}")
+    endforeach()
+    string(REPLACE "|" ";" warning_flags "${WARNING_FLAGS}")
+    if(ALLOWED_WARNINGS)
+      list(APPEND warning_flags -Wno-error)
+    endif()
+    set(flags ${strict_flags} ${warning_flags})
+    message(STATUS "compile flags: ${flags}")
   endif()
   compile_and_run("${SOURCE}" "${OUTPUT}" "-std=c++17;${flags}")
 

@@ -31,7 +31,7 @@
 #include "inhand/controller/ik.hpp"
 #include "inhand/controller/servo.hpp"
 #include "inhand/kinematics/finger_chain.hpp"
-#include "inhand/plant/scenario.hpp"
+#include "inhand/sim/scenario.hpp"
 
 #if defined(NDEBUG) || defined(EIGEN_NO_DEBUG)
 #error "the no-malloc guard needs assertions enabled in this translation unit"

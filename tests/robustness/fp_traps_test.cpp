@@ -8,7 +8,7 @@
 //     test finger, at random postures and at the fully stretched (singular) one;
 //   - PiController and HybridServo with saturating limits; ForcePlanner; the trajectory;
 //   - ReactiveController::update in a closed loop on the analytic plant: the paper's
-//     cylinder rotation (plant/scenario.hpp) shortened to about 1 s of manipulation
+//     cylinder rotation (sim/scenario.hpp) shortened to about 1 s of manipulation
 //     after the grasp and hold stages, with the plant's own code under the traps too.
 // The canaries are death tests proving the mechanism: a division by zero and an
 // inf - inf under the traps must die of SIGFPE. all_finite() is documented not to
@@ -25,7 +25,7 @@
 #include "common/test_support.hpp"
 #include "inhand/controller/ik.hpp"
 #include "inhand/controller/reactive_controller.hpp"
-#include "inhand/plant/scenario.hpp"
+#include "inhand/sim/scenario.hpp"
 
 namespace {
 

@@ -37,8 +37,8 @@
 #include "common/test_support.hpp"
 #include "inhand/controller/ik.hpp"
 #include "inhand/controller/reactive_controller.hpp"
-#include "inhand/plant/presets.hpp"
-#include "inhand/plant/scenario.hpp"
+#include "inhand/sim/presets.hpp"
+#include "inhand/sim/scenario.hpp"
 #include "robustness/robustness_support.hpp"
 
 namespace {

@@ -22,7 +22,7 @@
 
 #include "common/test_support.hpp"
 #include "inhand/controller/reactive_controller.hpp"
-#include "inhand/plant/presets.hpp"
+#include "inhand/sim/presets.hpp"
 
 namespace inhand_rob {
 

@@ -10,22 +10,25 @@
 #       output paths that name a FIFO, a symbolic link or a directory, runs killed by
 #       SIGTERM or SIGINT (signal_check.sh), and the bounds on plant steps and trace rows
 #   scenario.paper_files_up_to_date   scripts/gen_paper_scenarios.py --check
-find_package(nlohmann_json 3 REQUIRED)
+# The JSON check needs GTest and nlohmann-json, the runs the scenario runner (see
+# cmake/inhandOptionalPackages.cmake); each part is skipped without them.
 set(INHAND_SCENARIOS_DIR ${PROJECT_SOURCE_DIR}/scenarios)
 
-add_executable(scenarios_scenario_json_check ${CMAKE_CURRENT_LIST_DIR}/scenario_json_check.cpp)
-target_include_directories(scenarios_scenario_json_check PRIVATE
-  ${PROJECT_SOURCE_DIR}/examples ${PROJECT_SOURCE_DIR}/examples/scenario ${PROJECT_SOURCE_DIR}/tests)
-target_link_libraries(scenarios_scenario_json_check PRIVATE inhand::inhand inhand_warnings
-  nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
-target_compile_definitions(scenarios_scenario_json_check PRIVATE
-  INHAND_SCENARIO_DIR="${INHAND_SCENARIOS_DIR}" INHAND_README="${PROJECT_SOURCE_DIR}/README.md")
-gtest_discover_tests(scenarios_scenario_json_check DISCOVERY_TIMEOUT 60
-  WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} PROPERTIES LABELS scenarios)
+if(GTest_FOUND AND nlohmann_json_FOUND)
+  add_executable(scenarios_scenario_json_check ${CMAKE_CURRENT_LIST_DIR}/scenario_json_check.cpp)
+  target_include_directories(scenarios_scenario_json_check PRIVATE
+    ${PROJECT_SOURCE_DIR}/examples ${PROJECT_SOURCE_DIR}/examples/scenario ${PROJECT_SOURCE_DIR}/tests)
+  target_link_libraries(scenarios_scenario_json_check PRIVATE inhand::sim inhand_warnings
+    nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
+  target_compile_definitions(scenarios_scenario_json_check PRIVATE
+    INHAND_SCENARIO_DIR="${INHAND_SCENARIOS_DIR}" INHAND_README="${PROJECT_SOURCE_DIR}/README.md")
+  gtest_discover_tests(scenarios_scenario_json_check DISCOVERY_TIMEOUT 60
+    WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} PROPERTIES LABELS scenarios)
+endif()
 
 # The runs need the inhand_scenario program (examples are added after the tests, so
 # the target is referred to by name).
-if(INHAND_BUILD_EXAMPLES)
+if(INHAND_HAVE_SCENARIO_RUNNER)
   file(GLOB_RECURSE INHAND_SCENARIO_FILES CONFIGURE_DEPENDS ${INHAND_SCENARIOS_DIR}/*.json)
   set(seen_names)
   foreach(file IN LISTS INHAND_SCENARIO_FILES)
@@ -43,7 +46,7 @@ if(INHAND_BUILD_EXAMPLES)
       COMMAND inhand_scenario ${file} --check --quiet --summary ${PROJECT_BINARY_DIR}/scenario-${name}.summary.json)
     # Label `long`: the scenarios that simulate 600 s or more (about 10 s optimised,
     # over 2 minutes under the sanitizers, whose stage leaves them out; the 120 s hold
-    # of tests/plant/force_layer_plant_test.cpp covers the same path there).
+    # of tests/sim/force_layer_plant_test.cpp covers the same path there).
     set(labels scenario)
     if(name MATCHES "_600s$")
       list(APPEND labels long)

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "inhand/math/pose.hpp"
+#include "inhand/math/so3.hpp"
 #include "inhand/math/status.hpp"
 
 namespace inhand {
@@ -51,7 +52,8 @@ class JointList {
  public:
   static constexpr bool kHeap = (MaxDof == Dynamic);
   static constexpr int kCapacity = kHeap ? 1 : MaxDof;
-  using Storage = std::conditional_t<kHeap, std::vector<T>, std::array<T, kCapacity>>;
+  using Storage =
+      std::conditional_t<kHeap, std::vector<T>, std::array<T, static_cast<std::size_t>(kCapacity)>>;
 
   JointList() : size_(Dof == Dynamic ? 0 : Dof) {}
   int size() const noexcept { return kHeap ? static_cast<int>(storage_.size()) : size_; }
@@ -94,28 +96,57 @@ inline int coordinate_axis(const Vector<Scalar, 3>& axis, Scalar& sign) noexcept
   return -1;
 }
 
-/// One joint of forward_kinematics in space: writes the joint's world axis R * axis
-/// and turns R into R * Rot(axis, q). Real fingers mostly turn about a coordinate axis
-/// of their joint frame; R * Rot(+-e_k, q) then only mixes the other two columns of R
-/// (12 flops instead of building Rot and a 3 x 3 product), with the same result up to
-/// rounding.
-template <typename Scalar, typename DerivedAxis>
-inline void apply_joint(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Scalar q,
-                        const Eigen::MatrixBase<DerivedAxis>& world_axis_out) noexcept {
+/// R <- R * Rot(sign e_k, q) given c = cos q and s = sign sin q: only the two columns
+/// of R other than k mix (12 flops instead of building Rot and a 3 x 3 product).
+template <typename Scalar>
+inline void turn_about_coordinate_axis(Rotation<Scalar, 3>& R, int k, Scalar c, Scalar s) noexcept {
+  const int a = (k + 1) % 3, b = (k + 2) % 3;  // Rot_k maps e_a -> c e_a + s e_b
+  const Vector<Scalar, 3> ca = R.col(a), cb = R.col(b);
+  R.col(a) = c * ca + s * cb;
+  R.col(b) = c * cb - s * ca;
+}
+
+/// One joint in space given s = sin q and c = cos q: writes the joint's world axis
+/// R * axis and turns R into R * Rot(axis, q). Real fingers mostly turn about a
+/// coordinate axis of their joint frame; R * Rot(+-e_k, q) then only mixes the other
+/// two columns of R. Any other axis is turned by `turn_general(R)`.
+template <typename Scalar, typename DerivedAxis, typename TurnGeneral>
+inline void turn_joint(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Scalar s, Scalar c,
+                       const Eigen::MatrixBase<DerivedAxis>& world_axis_out,
+                       TurnGeneral&& turn_general) noexcept {
   auto& world_axis = const_cast<Eigen::MatrixBase<DerivedAxis>&>(world_axis_out);
   Scalar sign = Scalar(1);
   const int k = coordinate_axis(axis, sign);
   if (k < 0) {
     world_axis = R * axis;
-    R = R * joint_rotation<Scalar>(axis, q);
+    turn_general(R);
     return;
   }
   world_axis = sign * R.col(k);
-  const Scalar c = std::cos(q), s = sign * std::sin(q);
-  const int a = (k + 1) % 3, b = (k + 2) % 3;  // Rot_k maps e_a -> c e_a + s e_b
-  const Vector<Scalar, 3> ca = R.col(a), cb = R.col(b);
-  R.col(a) = c * ca + s * cb;
-  R.col(b) = c * cb - s * ca;
+  turn_about_coordinate_axis<Scalar>(R, k, c, sign * s);
+}
+
+/// The joint of forward_kinematics: a general axis by Eigen's AngleAxis (equal to the
+/// coordinate-axis result up to rounding).
+template <typename Scalar, typename DerivedAxis>
+inline void apply_joint(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Scalar q,
+                        const Eigen::MatrixBase<DerivedAxis>& world_axis_out) noexcept {
+  turn_joint<Scalar>(R, axis, std::sin(q), std::cos(q), world_axis_out,
+                     [&](Rotation<Scalar, 3>& Rg) { Rg = Rg * joint_rotation<Scalar>(axis, q); });
+}
+
+/// The joint of forward_kinematics_sincos: a general axis by Rodrigues' formula
+/// Rot(axis, q) = I + s K + (1 - c) K^2 with K = [axis]x.
+template <typename Scalar, typename DerivedAxis>
+inline void apply_joint_sincos(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Scalar s,
+                               Scalar c,
+                               const Eigen::MatrixBase<DerivedAxis>& world_axis_out) noexcept {
+  turn_joint<Scalar>(R, axis, s, c, world_axis_out, [&](Rotation<Scalar, 3>& Rg) {
+    const Rotation<Scalar, 3> K = hat<Scalar>(axis);
+    const Rotation<Scalar, 3> K2 = K * K;
+    const Rotation<Scalar, 3> Rj = Rotation<Scalar, 3>::Identity() + s * K + (Scalar(1) - c) * K2;
+    Rg = Rg * Rj;
+  });
 }
 
 /// Exactly the identity (the common case of a joint frame not turned at q = 0).
@@ -250,10 +281,12 @@ struct FingerKinematics {
   }
 };
 
-/// Forward kinematics: fills `ws` for joint angles q (size dof). noexcept, no allocation.
-template <typename Chain, typename DerivedQ>
-inline void forward_kinematics(const Chain& chain, const Eigen::MatrixBase<DerivedQ>& q,
-                               FingerKinematics<Chain>& ws) noexcept {
+namespace detail {
+/// The chain walk of forward kinematics: from the base through each joint's fixed
+/// transform (its world origin written to ws), `turn(R, i, ws.joint_axes.col(i))` writes
+/// joint i's world axis and turns R by it, then the fingertip frame.
+template <typename Chain, typename TurnJoint>
+inline void walk_chain(const Chain& chain, FingerKinematics<Chain>& ws, TurnJoint&& turn) noexcept {
   using Scalar = typename Chain::Scalar;
   constexpr int Dim = Chain::Dim;
   Rotation<Scalar, Dim> R = chain.base.rotation;
@@ -261,21 +294,51 @@ inline void forward_kinematics(const Chain& chain, const Eigen::MatrixBase<Deriv
   for (int i = 0; i < chain.dof(); ++i) {
     const auto& j = chain.joints[i];
     p += R * j.parent_to_joint.position;
-    if (!detail::is_identity(j.parent_to_joint.rotation)) R = R * j.parent_to_joint.rotation;
+    if (!is_identity(j.parent_to_joint.rotation)) R = R * j.parent_to_joint.rotation;
     ws.joint_origins.col(i) = p;
-    if constexpr (Dim == 3) {
-      detail::apply_joint<Scalar>(R, j.axis, static_cast<Scalar>(q(i)), ws.joint_axes.col(i));
-    } else {
-      ws.joint_axes.col(i) = Vector<Scalar, 3>(Scalar(0), Scalar(0), j.axis.z());
-      R = R * so2_exp<Scalar>(j.axis.z() * q(i));
-    }
+    turn(R, i, ws.joint_axes.col(i));
   }
   ws.fingertip.position = p + R * chain.joint_to_tip.position;
-  if (detail::is_identity(chain.joint_to_tip.rotation)) {
+  if (is_identity(chain.joint_to_tip.rotation)) {
     ws.fingertip.rotation = R;
   } else {
     ws.fingertip.rotation = R * chain.joint_to_tip.rotation;
   }
+}
+}  // namespace detail
+
+/// Forward kinematics: fills `ws` for joint angles q (size dof). noexcept, no allocation.
+template <typename Chain, typename DerivedQ>
+inline void forward_kinematics(const Chain& chain, const Eigen::MatrixBase<DerivedQ>& q,
+                               FingerKinematics<Chain>& ws) noexcept {
+  using Scalar = typename Chain::Scalar;
+  constexpr int Dim = Chain::Dim;
+  detail::walk_chain(chain, ws, [&](Rotation<Scalar, Dim>& R, int i, auto&& world_axis) {
+    const auto& j = chain.joints[i];
+    if constexpr (Dim == 3) {
+      detail::apply_joint<Scalar>(R, j.axis, static_cast<Scalar>(q(i)), world_axis);
+    } else {
+      world_axis = Vector<Scalar, 3>(Scalar(0), Scalar(0), j.axis.z());
+      R = R * so2_exp<Scalar>(j.axis.z() * q(i));
+    }
+  });
+}
+
+/// Forward kinematics in space from the sines and cosines of the joint angles (each of
+/// size dof) instead of the angles, for a caller that keeps them up to date itself (the
+/// simulator advances them by the angle-addition formula). A joint about a coordinate
+/// axis turns exactly as in forward_kinematics; a general axis by Rodrigues' formula
+/// (equal to forward_kinematics up to rounding). noexcept, no allocation.
+template <typename Chain, typename DerivedS, typename DerivedC>
+inline void forward_kinematics_sincos(const Chain& chain, const Eigen::MatrixBase<DerivedS>& sin_q,
+                                      const Eigen::MatrixBase<DerivedC>& cos_q,
+                                      FingerKinematics<Chain>& ws) noexcept {
+  static_assert(Chain::Dim == 3, "forward_kinematics_sincos is for spatial chains");
+  using Scalar = typename Chain::Scalar;
+  detail::walk_chain(chain, ws, [&](Rotation<Scalar, 3>& R, int i, auto&& world_axis) {
+    detail::apply_joint_sincos<Scalar>(R, chain.joints[i].axis, static_cast<Scalar>(sin_q(i)),
+                                       static_cast<Scalar>(cos_q(i)), world_axis);
+  });
 }
 
 /// Jacobian of the world velocity of a point attached to the distal link and now at

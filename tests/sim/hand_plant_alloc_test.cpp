@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <new>
 
-#include "inhand/plant/presets.hpp"
+#include "inhand/sim/presets.hpp"
 
 namespace {
 std::atomic<long> g_allocations{0};

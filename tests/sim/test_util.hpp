@@ -3,7 +3,7 @@
 
 #include <cstdlib>
 
-#include "inhand/plant/hand_plant.hpp"
+#include "inhand/sim/hand_plant.hpp"
 
 namespace plant_test {
 

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <vector>
 
-#include "inhand/plant/scenario.hpp"
+#include "inhand/sim/scenario.hpp"
 
 namespace {
 

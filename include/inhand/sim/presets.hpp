@@ -38,7 +38,7 @@
 // below, for both paper objects (the 20 mm radius cylinder and the 20 x 20 x 80 mm box).
 // The grasp configuration puts each fingertip centre halfway between its nominal
 // contacts on the two objects; the open configuration withdraws it 15 mm along the
-// approach direction and 20 mm down (10-25 mm clear). tests/plant/presets_test.cpp checks
+// approach direction and 20 mm down (10-25 mm clear). tests/sim/presets_test.cpp checks
 // numerically that every fingertip reaches its contact on both objects, at the nominal
 // pose and with the object moved +-5 mm along X, Y, Z or turned +-0.2 rad about X, Y, Z,
 // away from the joint limits and from singular configurations.
@@ -49,7 +49,7 @@
 #include <utility>
 #include <vector>
 
-#include "inhand/plant/hand_plant.hpp"
+#include "inhand/sim/hand_plant.hpp"
 
 namespace inhand::plant {
 

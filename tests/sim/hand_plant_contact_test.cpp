@@ -4,8 +4,8 @@
 
 #include <random>
 
-#include "inhand/plant/presets.hpp"
-#include "plant/test_util.hpp"
+#include "inhand/sim/presets.hpp"
+#include "sim/test_util.hpp"
 
 namespace {
 

@@ -1,6 +1,6 @@
 // ObjectShape: closed-form surface queries against brute-force surface sampling, and
 // mass properties against the textbook formulas and numeric integration.
-#include "inhand/plant/shapes.hpp"
+#include "inhand/sim/shapes.hpp"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 // moved +-5 mm along X, Y, Z or turned +-0.2 rad about X, Y, Z, with margin from the
 // joint limits and from singular configurations. Position IK iterates ContactIk (the
 // library's eq. 3 solver) with small steps towards the fingertip-centre target.
-#include "inhand/plant/presets.hpp"
+#include "inhand/sim/presets.hpp"
 
 #include <gtest/gtest.h>
 

@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "inhand/plant/hand_plant.hpp"
-#include "plant/test_util.hpp"
+#include "inhand/sim/hand_plant.hpp"
+#include "sim/test_util.hpp"
 
 namespace {
 
