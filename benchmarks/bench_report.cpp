@@ -1,5 +1,5 @@
 // inhand_bench_report: turns the JSON written by inhand_benchmarks into a markdown
-// report of the key figures (scripts/bench runs it; README.md shows its table).
+// report of the key figures (scripts/bench runs it; docs/benchmarks.md shows its table).
 //
 //   inhand_bench_report <bench.json> <report.md>
 //

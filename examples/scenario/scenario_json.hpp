@@ -1,6 +1,6 @@
 // Scenario files of the analytic 3-D plant: JSON -> inhand::plant::ScenarioSpec plus
-// the expectations checked after the run. The format is documented in README.md
-// ("Scenario files"); every key not given takes the library default (the default
+// the expectations checked after the run. The format is documented in docs/scenarios.md
+// ("The scenario file"); every key not given takes the library default (the default
 // member values of PlantParams, ReactiveController::Config, StageSpec, ...).
 //
 // Strictness: unknown keys, wrong types, values outside the documented ranges (which

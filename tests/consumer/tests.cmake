@@ -9,10 +9,11 @@
 #   consumer.pkg_config_strict_sim  the same for the simulator (strict/sim_main.cpp)
 #   consumer.add_subdirectory  add_subdirectory(<repo> inhand); subproject options OFF
 #   consumer.header_dropin     c++ -std=c++17 -I include -I <eigen> only
-#   consumer.readme_tour       README.md's API tour, compiled and run
+#   consumer.readme_tour       README.md's whole-hand tour, compiled and run
 #   consumer.readme_tour_in_sync  README.md's tour block == readme_tour.cpp
-# and example.finger_tracking, which runs the example (it exits non-zero unless it
-# converged).
+# and example.<name>, which runs examples/<name>.cpp (finger_tracking, 01_finger_servo,
+# 02_whole_hand, 03_external_kinematics, 04_planar_hand); each exits non-zero unless its
+# own check passed.
 set(INHAND_CONSUMER_SRC ${CMAKE_CURRENT_LIST_DIR})
 set(INHAND_CONSUMER_BIN ${CMAKE_CURRENT_BINARY_DIR}/consumer)
 set(INHAND_CONSUMER_DRIVER ${INHAND_CONSUMER_SRC}/driver.cmake)
@@ -121,9 +122,15 @@ if(INHAND_INSTALL)
   endif()
 endif()
 
-# The examples are consumers too: finger_tracking exits non-zero unless it converged.
-# (Examples are added after the tests, so the target cannot be tested for here.)
-if(INHAND_BUILD_EXAMPLES AND EXISTS ${PROJECT_SOURCE_DIR}/examples/finger_tracking.cpp)
-  add_test(NAME example.finger_tracking COMMAND finger_tracking)
-  set_tests_properties(example.finger_tracking PROPERTIES LABELS example TIMEOUT 120)
+# The examples are consumers too: each exits non-zero unless its own check passed
+# (finger_tracking: it converged; 01_..04_: see the file comment of each).
+# (Examples are added after the tests, so the targets cannot be tested for here.)
+if(INHAND_BUILD_EXAMPLES)
+  foreach(example finger_tracking 01_finger_servo 02_whole_hand 03_external_kinematics
+                  04_planar_hand)
+    if(EXISTS ${PROJECT_SOURCE_DIR}/examples/${example}.cpp)
+      add_test(NAME example.${example} COMMAND ${example})
+      set_tests_properties(example.${example} PROPERTIES LABELS example TIMEOUT 120)
+    endif()
+  endforeach()
 endif()
