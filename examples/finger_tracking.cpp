@@ -1,7 +1,7 @@
 // finger_tracking: one spatial 3-DOF finger slides its contact point around a small
 // circle on a flat, springy surface while pressing on it with 1 N.
 //
-// This is the lowest layer of the method (method.md section 6, Fig. 2 layer 3) run on
+// This is the lowest layer of the method (docs/method.md section 6, Fig. 2 layer 3) run on
 // its own, in a purely kinematic loop at 1 kHz for 2 s:
 //   1. desired contact velocity v_d = circle feed-forward + tangential position feedback
 //   2. HybridServo (eqs. 4-7):  e = g1(v_d) - g2(f_d - f_m) n

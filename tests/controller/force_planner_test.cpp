@@ -1,4 +1,4 @@
-// Tests of the force planner (controller/force_planner.hpp, method.md section 5): the
+// Tests of the force planner (controller/force_planner.hpp, docs/method.md section 5): the
 // paper's thumb balancing three preset fingers, near-collinear normals, shared
 // balancing, limits (always flagged), fingers out of contact, no balancing contact,
 // the first-order filter, invalid input, parameter validation, run-time finger count.

@@ -21,7 +21,7 @@ if(GTest_FOUND AND nlohmann_json_FOUND)
   target_link_libraries(scenarios_scenario_json_check PRIVATE inhand::sim inhand_warnings
     nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
   target_compile_definitions(scenarios_scenario_json_check PRIVATE
-    INHAND_SCENARIO_DIR="${INHAND_SCENARIOS_DIR}" INHAND_README="${PROJECT_SOURCE_DIR}/README.md")
+    INHAND_SCENARIO_DIR="${INHAND_SCENARIOS_DIR}" INHAND_README="${PROJECT_SOURCE_DIR}/docs/scenarios.md")
   gtest_discover_tests(scenarios_scenario_json_check DISCOVERY_TIMEOUT 60
     WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} PROPERTIES LABELS scenarios)
 endif()

@@ -1,4 +1,4 @@
-// Layer 2, forces: the desired normal force of every finger (method.md section 5).
+// Layer 2, forces: the desired normal force of every finger (docs/method.md section 5).
 //
 // For local manipulation the contact normals are (near) collinear and the planner
 // keeps the resultant normal force zero:  sum_i f_i n_i = 0,

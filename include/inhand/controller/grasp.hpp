@@ -1,4 +1,4 @@
-// The grasp phase (method.md section 8) and the per-finger contact states.
+// The grasp phase (docs/method.md section 8) and the per-finger contact states.
 //
 // Grasp (object frozen by the simulator or held by a fixture): every finger moves a
 // virtual contact point on its fingertip, p_v = fingertip centre - radius * n_t, towards

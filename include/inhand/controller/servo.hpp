@@ -1,4 +1,4 @@
-// Hybrid position/force servo of one finger (method.md section 6, eqs. 4-7).
+// Hybrid position/force servo of one finger (docs/method.md section 6, eqs. 4-7).
 //
 //   e_m  = g1(v_d)                 PI on the desired contact-point velocity (eq. 4)
 //   df   = f_d - f_m               normal-force error, newtons (eq. 5, scalar part)

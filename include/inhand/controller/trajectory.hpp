@@ -1,4 +1,4 @@
-// Layer 1: the desired object pose over time, interpolated in SE(3) (method.md
+// Layer 1: the desired object pose over time, interpolated in SE(3) (docs/method.md
 // sections 3 and 7).
 //
 // A trajectory is a start pose and a sequence of segments. Each segment applies a

@@ -1,4 +1,4 @@
-// Contact kinematics under the micro-manipulation assumption (method.md section 2).
+// Contact kinematics under the micro-manipulation assumption (docs/method.md section 2).
 //
 // Eq. 2: the object point at the contact moves with v_c = v_o + omega_o x (p_c - p_o).
 // Within one control tick the fingertip contact point is assumed to move with the
@@ -16,9 +16,9 @@ namespace inhand {
 
 /// Desired contact-point velocity v_o + omega_o x (p_c - p_o), eq. 2.
 template <typename Scalar, int Dim>
-inline Vector<Scalar, Dim> contact_point_velocity(const Twist<Scalar, Dim>& object_twist,
-                                                  const Vector<Scalar, Dim>& contact_point,
-                                                  const Vector<Scalar, Dim>& object_origin) noexcept {
+inline Vector<Scalar, Dim> contact_point_velocity(
+    const Twist<Scalar, Dim>& object_twist, const Vector<Scalar, Dim>& contact_point,
+    const Vector<Scalar, Dim>& object_origin) noexcept {
   const AngularVector<Scalar, Dim> omega = object_twist.template tail<SpatialDim<Dim>::kRot>();
   return object_twist.template head<Dim>() +
          angular_cross<Scalar>(omega, Vector<Scalar, Dim>(contact_point - object_origin));

@@ -1,5 +1,5 @@
 // Serial-chain finger kinematics: fingertip frame, contact point on a spherical
-// fingertip, and the Jacobian of that point (method.md section 4).
+// fingertip, and the Jacobian of that point (docs/method.md section 4).
 //
 // Model: the finger base is a Pose in the world (hand) frame. Joint i sits at the
 // fixed transform `parent_to_joint` from the previous joint's (rotated) frame, or from

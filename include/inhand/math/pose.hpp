@@ -1,4 +1,4 @@
-// Poses in the plane or in space: pose error and interpolation (method.md section 3).
+// Poses in the plane or in space: pose error and interpolation (docs/method.md section 3).
 //
 // A Pose is the object (or a frame) in the world: `position` of its reference point
 // and `rotation` R with x_world = R * x_body + position. Units: metres.

@@ -1,7 +1,7 @@
 // Rotations: SO(3) exp/log, the Euler convention and its rate matrix, and the
 // planar (SO(2)) counterparts used when Dim == 2.
 //
-// Euler convention (method.md section 3, the user-facing edge only): roll-pitch-yaw
+// Euler convention (docs/method.md section 3, the user-facing edge only): roll-pitch-yaw
 // angles (phi, theta, psi) about the FIXED world axes x, then y, then z:
 //     R = Rz(psi) * Ry(theta) * Rx(phi)
 // (equivalently intrinsic z-y'-x''). With theta = psi = 0, phi is a rotation about

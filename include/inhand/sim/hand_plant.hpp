@@ -1,7 +1,7 @@
 // Analytic 3-D plant: kinematic fingers with spherical fingertips, one free rigid
 // object, compliant point contacts with Coulomb friction and stiction, and noisy
 // tactile / vision sensing. It stands in for the physics engine of the paper's
-// experiments (method.md section 9) so that a controller can be tested end to end.
+// experiments (docs/method.md section 9) so that a controller can be tested end to end.
 // The parts: plant_params.hpp (configuration), plant_readings.hpp (what it reports),
 // finger_model.hpp (joints and commands), contact_model.hpp (contact forces),
 // object_dynamics.hpp (the free object), sensing.hpp and noise_source.hpp (noise).
@@ -17,7 +17,7 @@
 // advanced by h), applied in the next step. So contact(i) and tactile(i) always
 // describe the current joints and object pose. Frozen mode holds the object exactly at
 // its pose (v = omega = 0); contacts still produce forces and tactile readings (the
-// grasp phase, method.md section 8).
+// grasp phase, docs/method.md section 8).
 //
 // step(), setters of commands and all getters are noexcept and allocation-free.
 #pragma once

@@ -1,4 +1,4 @@
-// The paper's 12 experiments (method.md section 9) as ScenarioSpecs: the preset hand
+// The paper's 12 experiments (docs/method.md section 9) as ScenarioSpecs: the preset hand
 // on the paper's cylinder or slender box, translated 5 mm or rotated 0.2 rad about
 // each axis of the reference frame. Units SI (s, m, rad), world frame.
 #pragma once
@@ -13,7 +13,7 @@ namespace inhand::plant {
 enum class PaperObject { cylinder, slender_box };
 enum class PaperTask { translate, rotate };
 
-/// One of the paper's 12 experiments (method.md section 9): object x {translate,
+/// One of the paper's 12 experiments (docs/method.md section 9): object x {translate,
 /// rotate} x axis (0 = X, 1 = Y, 2 = Z of the reference frame). Stage 0 grasps at the
 /// nominal force with the object frozen, stage 1 releases and holds, stage 2 moves
 /// 5 mm along the axis and back, or rotates 0 -> -0.2 rad -> 0 about it.

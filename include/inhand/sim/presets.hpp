@@ -4,7 +4,7 @@
 // Units: metres, radians, rad/s, kilograms. Frame: the world (hand) frame, with the
 // nominal object centre at the origin.
 //
-// Geometry shared by both presets (method.md section 9, the paper's Fig. 5):
+// Geometry shared by both presets (docs/method.md section 9, the paper's Fig. 5):
 //  - The object's long axis (object z, the cylinder axis) lies along world X; the
 //    nominal object rotation is Ry(+pi/2), which maps object z to world +X.
 //  - The fingers sit on the +Y side of the object, the thumb (opposing finger) on the

@@ -1,5 +1,5 @@
 // Closed-loop scenarios, the specification: the hand, the object, the plant and
-// controller settings, the stages (method.md sections 8-9), injected faults and what a
+// controller settings, the stages (docs/method.md sections 8-9), injected faults and what a
 // run reports (scenario_runner.hpp runs one).
 //
 // Stages, each a StageSpec:

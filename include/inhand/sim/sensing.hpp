@@ -1,4 +1,4 @@
-// Sensing of the analytic plant (method.md section 1): tactile readings and the
+// Sensing of the analytic plant (docs/method.md section 1): tactile readings and the
 // "vision" object pose are the current truth corrupted by noise that is drawn ONLY by
 // sample() (once per control period, from the plant's NoiseSource); repeated reads
 // between two samples agree. See SensorNoise for the parameters.
