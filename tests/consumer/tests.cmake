@@ -58,9 +58,6 @@ if(INHAND_INSTALL)
               -P ${INHAND_CONSUMER_DRIVER})
     set_tests_properties(consumer.pkg_config PROPERTIES FIXTURES_REQUIRED inhand_staged_install)
     if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
-      # Known warnings of controller/ headers (being reworked); any other warning fails.
-      set(INHAND_STRICT_ALLOWED_WARNINGS
-        "inhand/controller/(trajectory|reactive_controller)\\.hpp:[0-9]+:[0-9]+: warning: conversion to .* from .*int.* may change the sign of the result \\[-Wsign-conversion\\]")
       foreach(case "strict|main" "strict_sim|sim_main")
         string(REPLACE "|" ";" parts "${case}")
         list(GET parts 0 name)
@@ -71,7 +68,6 @@ if(INHAND_INSTALL)
                   -DINCLUDEDIR=${CMAKE_INSTALL_INCLUDEDIR} -DEXPECTED_VERSION=${PROJECT_VERSION}
                   -DCXX_COMPILER=${CMAKE_CXX_COMPILER} -DSTRICT=ON
                   "-DWARNING_FLAGS=-Wall|-Wextra|-Wconversion|-Wsign-conversion|-Werror"
-                  "-DALLOWED_WARNINGS=${INHAND_STRICT_ALLOWED_WARNINGS}"
                   -DSOURCE=${INHAND_CONSUMER_SRC}/strict/${source}.cpp
                   -DOUTPUT=${INHAND_CONSUMER_BIN}/pkg_config_${name}/consumer
                   -P ${INHAND_CONSUMER_DRIVER})

@@ -35,9 +35,8 @@
 // Time: Input::time is a double whatever Scalar is (a time base that keeps 1 us
 // resolution for ~270 years); dt is computed in double and then converted to Scalar.
 //
-// Phases, driven by the user: configure() -> start_grasp(targets) -> update() ...
-// returns `grasped` once every finger presses with the nominal force -> the user
-// releases the object and calls start_manipulation(trajectory) -> update() tracks it.
+// Phases: configure() -> start_grasp(targets) -> update() until `grasped` (every finger
+// presses with the nominal force) -> release the object, start_manipulation(trajectory).
 // Mixed-DOF hands: use Dof = inhand::Dynamic with MaxDof the largest finger (e.g. a
 // 5-joint thumb and 4-joint fingers: Dof = Dynamic, MaxDof = 5): still no allocation.
 #pragma once
@@ -98,7 +97,6 @@ class ReactiveController {
   using FingerOutput = typename Types::FingerOutput;
   using Output = typename Types::Output;
   using Targets = detail::FingerArray<GraspTarget<Scalar, Dim>, NumFingers>;
-
   using Phase = ControllerPhase;  ///< see the file comment
 
   /// Checks a configuration without applying it; names the first invalid field.

@@ -49,34 +49,10 @@ class HandPlant {
   using JointVector = PlantFinger::JointVector;
 
   /// Checks the fingers, the object, the parameters and the explicit-integration
-  /// stability of the contact springs on this object: with N fingers, K = N max(k_n,
-  /// k_t), C = N max(c_n, c_t) and m_eff the smallest of the mass and I_j / rho_j^2
-  /// (rho_j the largest distance of the surface from principal axis j), it requires
-  /// h sqrt(K / m_eff) <= 0.5 and h C / m_eff <= 1.
+  /// stability of the contact springs on this object (detail::validate_plant_setup()).
   static Validation validate(const std::vector<PlantFinger>& fingers, const ObjectDef& object,
                              const PlantParams& params) noexcept {
-    if (fingers.empty()) return Validation::invalid("fingers", "need at least one finger");
-    for (std::size_t i = 0; i < fingers.size(); ++i) {
-      const Validation v = fingers[i].validate();
-      if (!v.ok()) return v.for_finger(static_cast<int>(i));
-      if (!(fingers[i].fingertip_radius > 0.0))
-        return Validation::invalid("fingertip_radius", "must be > 0", -1, static_cast<int>(i));
-    }
-    Validation v = object.validate();
-    if (!v.ok()) return v;
-    v = params.validate();
-    if (!v.ok()) return v;
-    const double n = static_cast<double>(fingers.size());
-    const ContactParams& c = params.contact;
-    const double K = n * std::max(c.normal_stiffness, c.tangential_stiffness);
-    const double C = n * std::max(c.normal_damping, c.tangential_damping);
-    const double m_eff = detail::effective_mass(object);
-    const double h = params.time_step;
-    if (h * std::sqrt(K / m_eff) > 0.5)
-      return Validation::invalid("time_step", "too large for the contact stiffness on this object");
-    if (h * C / m_eff > 1.0)
-      return Validation::invalid("time_step", "too large for the contact damping on this object");
-    return Validation::valid();
+    return detail::validate_plant_setup(fingers, object, params);
   }
 
   /// Throws std::invalid_argument naming the offending field if validate() fails.

@@ -24,18 +24,21 @@ namespace inhand::plant {
 enum class StageKind { grasp, hold, manipulate };
 inline const char* to_string(StageKind k) noexcept {
   switch (k) {
-    case StageKind::grasp: return "grasp";
-    case StageKind::hold: return "hold";
-    case StageKind::manipulate: return "manipulate";
+    case StageKind::grasp:
+      return "grasp";
+    case StageKind::hold:
+      return "hold";
+    case StageKind::manipulate:
+      return "manipulate";
   }
   return "unknown";
 }
 
 struct FingerStageMetrics {
-  double slip_distance = 0.0;     ///< m
+  double slip_distance = 0.0;  ///< m
   int contact_losses = 0;
-  double max_force_error = 0.0;   ///< N
-  double rms_force_error = 0.0;   ///< N
+  double max_force_error = 0.0;           ///< N
+  double rms_force_error = 0.0;           ///< N
   double max_relative_force_error = 0.0;  ///< |f - f_d| / f_d
   double final_desired_force = 0.0;       ///< N
   double final_measured_force = 0.0;      ///< N
@@ -44,7 +47,7 @@ struct FingerStageMetrics {
 struct StageMetrics {
   std::string name;
   StageKind kind = StageKind::hold;
-  double start_time = 0.0, end_time = 0.0;  ///< s
+  double start_time = 0.0, end_time = 0.0;                                                ///< s
   double rms_position_error = 0.0, max_position_error = 0.0, final_position_error = 0.0;  ///< m
   double rms_orientation_error = 0.0, max_orientation_error = 0.0,
          final_orientation_error = 0.0;  ///< rad
@@ -66,15 +69,16 @@ struct MetricsTolerances {
 /// What a plant reports about one finger after a tick (truth, not sensing).
 struct FingerTruth {
   bool touching = false;
-  double normal_force = 0.0;    ///< N, true
-  double desired_force = 0.0;   ///< N, the controller's plan (0: not servoed)
-  double slip_distance = 0.0;   ///< m, cumulative
+  double normal_force = 0.0;   ///< N, true
+  double desired_force = 0.0;  ///< N, the controller's plan (0: not servoed)
+  double slip_distance = 0.0;  ///< m, cumulative
 };
 
 class StageMetricsAccumulator {
  public:
   void begin(const std::string& name, StageKind kind, double start_time,
-             const std::vector<FingerTruth>& fingers, const MetricsTolerances& tol, bool count_losses) {
+             const std::vector<FingerTruth>& fingers, const MetricsTolerances& tol,
+             bool count_losses) {
     m_ = StageMetrics{};
     m_.name = name;
     m_.kind = kind;
@@ -137,19 +141,22 @@ class StageMetricsAccumulator {
     const double count = static_cast<double>(std::max<long>(ticks_, 1));
     m_.rms_position_error = std::sqrt(sum_p2_ / count);
     m_.rms_orientation_error = std::sqrt(sum_r2_ / count);
-    m_.rms_force_error = f_samples_ > 0 ? std::sqrt(sum_f2_ / static_cast<double>(f_samples_)) : 0.0;
+    m_.rms_force_error =
+        f_samples_ > 0 ? std::sqrt(sum_f2_ / static_cast<double>(f_samples_)) : 0.0;
     m_.end_time = end_time;
     m_.completed = completed;
     // Outside tolerance on the last tick: never settled.
-    m_.settle_time = (ticks_ > 0 && last_outside_ >= last_t_) ? std::numeric_limits<double>::infinity()
-                                                               : last_outside_;
+    m_.settle_time = (ticks_ > 0 && last_outside_ >= last_t_)
+                         ? std::numeric_limits<double>::infinity()
+                         : last_outside_;
     for (std::size_t i = 0; i < m_.fingers.size(); ++i) {
       FingerStageMetrics& fm = m_.fingers[i];
       fm.slip_distance = last_slip_[i] - slip0_[i];
       fm.rms_force_error = fs_[i] > 0 ? std::sqrt(f2_[i] / static_cast<double>(fs_[i])) : 0.0;
       m_.contact_losses += fm.contact_losses;
       m_.max_force_error = std::max(m_.max_force_error, fm.max_force_error);
-      m_.max_relative_force_error = std::max(m_.max_relative_force_error, fm.max_relative_force_error);
+      m_.max_relative_force_error =
+          std::max(m_.max_relative_force_error, fm.max_relative_force_error);
     }
     return m_;
   }
@@ -172,7 +179,8 @@ inline void pose_errors(const Pose<double, Dim>& desired, const Pose<double, Dim
                         double& position_error, double& orientation_error) noexcept {
   position_error = (desired.position - actual.position).norm();
   orientation_error =
-      rotation_log<double>(Rotation<double, Dim>(desired.rotation * actual.rotation.transpose())).norm();
+      rotation_log<double>(Rotation<double, Dim>(desired.rotation * actual.rotation.transpose()))
+          .norm();
 }
 
 }  // namespace inhand::plant

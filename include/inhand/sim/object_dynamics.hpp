@@ -12,6 +12,8 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
+#include <vector>
 
 #include "inhand/math/pose.hpp"
 #include "inhand/math/so3.hpp"
@@ -81,6 +83,38 @@ inline double effective_mass(const ObjectDef& object) noexcept {
     }
   }
   return std::min(object.mass, I.cwiseQuotient(rho2).minCoeff());
+}
+
+/// Checks the fingers, the object, the parameters and the explicit-integration
+/// stability of the contact springs on this object: with N fingers, K = N max(k_n,
+/// k_t), C = N max(c_n, c_t) and m_eff the smallest of the mass and I_j / rho_j^2
+/// (rho_j the largest distance of the surface from principal axis j), it requires
+/// h sqrt(K / m_eff) <= 0.5 and h C / m_eff <= 1.
+inline Validation validate_plant_setup(const std::vector<PlantFinger>& fingers,
+                                       const ObjectDef& object,
+                                       const PlantParams& params) noexcept {
+  if (fingers.empty()) return Validation::invalid("fingers", "need at least one finger");
+  for (std::size_t i = 0; i < fingers.size(); ++i) {
+    const Validation v = fingers[i].validate();
+    if (!v.ok()) return v.for_finger(static_cast<int>(i));
+    if (!(fingers[i].fingertip_radius > 0.0))
+      return Validation::invalid("fingertip_radius", "must be > 0", -1, static_cast<int>(i));
+  }
+  Validation v = object.validate();
+  if (!v.ok()) return v;
+  v = params.validate();
+  if (!v.ok()) return v;
+  const double n = static_cast<double>(fingers.size());
+  const ContactParams& c = params.contact;
+  const double K = n * std::max(c.normal_stiffness, c.tangential_stiffness);
+  const double C = n * std::max(c.normal_damping, c.tangential_damping);
+  const double m_eff = detail::effective_mass(object);
+  const double h = params.time_step;
+  if (h * std::sqrt(K / m_eff) > 0.5)
+    return Validation::invalid("time_step", "too large for the contact stiffness on this object");
+  if (h * C / m_eff > 1.0)
+    return Validation::invalid("time_step", "too large for the contact damping on this object");
+  return Validation::valid();
 }
 
 }  // namespace inhand::plant::detail

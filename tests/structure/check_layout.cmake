@@ -1,0 +1,52 @@
+# The library's layout rules, checked on the headers as they are (cmake -P):
+#   1. The include graph points one way: math <- kinematics <- controller <- sim.
+#      A header under include/inhand/<layer>/ includes inhand headers of its own layer
+#      or of a layer below it only; the core's top-level headers (inhand.hpp,
+#      version.hpp) include nothing from sim.
+#   2. No header is longer than MAX_LINES lines.
+# Arguments: -DINCLUDE_DIR=<repo>/include -DMAX_LINES=<n>
+cmake_minimum_required(VERSION 3.16)
+
+set(rank_math 0)
+set(rank_kinematics 1)
+set(rank_controller 2)
+set(rank_sim 3)
+set(failures "")
+
+file(GLOB_RECURSE headers RELATIVE "${INCLUDE_DIR}" "${INCLUDE_DIR}/inhand/*.hpp")
+list(LENGTH headers count)
+if(count EQUAL 0)
+  message(FATAL_ERROR "no headers under ${INCLUDE_DIR}/inhand")
+endif()
+foreach(h IN LISTS headers)
+  file(STRINGS "${INCLUDE_DIR}/${h}" lines)
+  list(LENGTH lines n)
+  if(n GREATER MAX_LINES)
+    string(APPEND failures "${h}: ${n} lines (at most ${MAX_LINES})\n")
+  endif()
+  if(h MATCHES "^inhand/([a-z_]+)/")
+    set(layer "${CMAKE_MATCH_1}")
+    if(NOT DEFINED rank_${layer})
+      string(APPEND failures "${h}: folder ${layer} has no place in the layer order\n")
+      continue()
+    endif()
+    set(own ${rank_${layer}})
+  else()
+    set(layer "core top level")
+    set(own ${rank_controller})
+  endif()
+  foreach(line IN LISTS lines)
+    if(line MATCHES "^[ \t]*#[ \t]*include[ \t]*\"inhand/([a-z_]+)/")
+      set(target "${CMAKE_MATCH_1}")
+      if(NOT DEFINED rank_${target})
+        string(APPEND failures "${h}: includes from unknown folder ${target}\n")
+      elseif(rank_${target} GREATER own)
+        string(APPEND failures "${h} (${layer}) includes ${target}, a layer above it: ${line}\n")
+      endif()
+    endif()
+  endforeach()
+endforeach()
+if(failures)
+  message(FATAL_ERROR "layout rules broken:\n${failures}")
+endif()
+message(STATUS "${count} headers: include graph one way, none over ${MAX_LINES} lines")
