@@ -98,6 +98,17 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   return w;
 }
 
+/// Finger i's kinematics this tick; its contact's plausibility flagged in fo and w.
+template <typename Types>
+FingerPoints<Types> finger_points(const TickInput<Types>& t, int i, FingerMemory<Types>& m,
+                                  typename Types::FingerOutput& fo, ControllerWarning& w) noexcept {
+  const FingerPoints<Types> points(t.config.fingers[static_cast<std::size_t>(i)],
+                                   t.in.fingers[static_cast<std::size_t>(i)], m.kinematics);
+  fo.implausible_contact = points.implausible_contact(t.config.contact_tolerance);
+  if (fo.implausible_contact) w |= ControllerWarning::implausible_contact;
+  return points;
+}
+
 template <typename Types>
 void remember_contact(FingerMemory<Types>& m, const typename Types::TactileContact& c,
                       const typename Types::PoseT& object) noexcept {
@@ -122,10 +133,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
     typename Types::FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
-    const FingerPoints<Types> points(t.config.fingers[static_cast<std::size_t>(i)], f,
-                                     m.kinematics);
-    fo.implausible_contact = points.implausible_contact(t.config.contact_tolerance);
-    if (fo.implausible_contact) w |= ControllerWarning::implausible_contact;
+    const FingerPoints<Types> points = detail::finger_points(t, i, m, fo, w);
     if (f.contact.touching) {
       if (m.state == FingerState::approaching) m.layer3.servo.reset_force();
       m.state = FingerState::pressing;
@@ -207,10 +215,7 @@ ControllerStatus manipulation_phase(
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
     typename Types::FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
-    const FingerPoints<Types> points(t.config.fingers[static_cast<std::size_t>(i)], f,
-                                     m.kinematics);
-    fo.implausible_contact = points.implausible_contact(t.config.contact_tolerance);
-    if (fo.implausible_contact) w |= ControllerWarning::implausible_contact;
+    const FingerPoints<Types> points = detail::finger_points(t, i, m, fo, w);
     if (f.contact.touching) {
       if (m.state == FingerState::reacquiring) m.layer3.servo.reset_force();
       m.state = FingerState::in_contact;
