@@ -23,6 +23,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <type_traits>
 #include <vector>
 
@@ -57,14 +58,16 @@ class JointList {
   using Storage =
       std::conditional_t<kHeap, std::vector<T>, std::array<T, static_cast<std::size_t>(kCapacity)>>;
 
-  JointList() : size_(Dof == Dynamic ? 0 : Dof) {}
-  int size() const noexcept { return kHeap ? static_cast<int>(storage_.size()) : size_; }
+  static_assert(kCapacity <= 0xffff, "JointList: at most 65535 joints in fixed storage");
+
+  JointList() : size_(static_cast<std::uint16_t>(Dof == Dynamic ? 0 : Dof)) {}
+  int size() const noexcept { return kHeap ? static_cast<int>(storage_.size()) : int{size_}; }
   /// Sets the joint count (run-time DOF only). Returns false if not allowed.
   bool resize(int n) {
     if (Dof != Dynamic) return n == Dof;
     if (n < 0 || (!kHeap && n > kCapacity)) return false;
     if constexpr (kHeap) storage_.resize(static_cast<std::size_t>(n));
-    size_ = n;
+    size_ = static_cast<std::uint16_t>(n);
     return true;
   }
   T& operator[](int i) noexcept { return storage_[static_cast<std::size_t>(i)]; }
@@ -72,7 +75,7 @@ class JointList {
 
  private:
   Storage storage_{};
-  int size_;
+  std::uint16_t size_;  ///< unsigned: the count is visibly non-negative to the optimiser
 };
 }  // namespace detail
 
