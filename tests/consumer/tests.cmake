@@ -7,6 +7,8 @@
 #                              -Werror (Eigen as a system directory, inhand not): the
 #                              controller in double and float (strict/main.cpp)
 #   consumer.pkg_config_strict_sim  the same for the simulator (strict/sim_main.cpp)
+#   consumer.pkg_config_readme_tour the same for README.md's whole-hand loop, against the
+#                              installed prefix (readme_tour.cpp)
 #   consumer.add_subdirectory  add_subdirectory(<repo> inhand); subproject options OFF
 #   consumer.header_dropin     c++ -std=c++17 -I include -I <eigen> only
 #   consumer.readme_tour       README.md's whole-hand tour, compiled and run
@@ -58,7 +60,7 @@ if(INHAND_INSTALL)
               -P ${INHAND_CONSUMER_DRIVER})
     set_tests_properties(consumer.pkg_config PROPERTIES FIXTURES_REQUIRED inhand_staged_install)
     if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
-      foreach(case "strict|main" "strict_sim|sim_main")
+      foreach(case "strict|strict/main" "strict_sim|strict/sim_main" "readme_tour|readme_tour")
         string(REPLACE "|" ";" parts "${case}")
         list(GET parts 0 name)
         list(GET parts 1 source)
@@ -68,7 +70,7 @@ if(INHAND_INSTALL)
                   -DINCLUDEDIR=${CMAKE_INSTALL_INCLUDEDIR} -DEXPECTED_VERSION=${PROJECT_VERSION}
                   -DCXX_COMPILER=${CMAKE_CXX_COMPILER} -DSTRICT=ON
                   "-DWARNING_FLAGS=-Wall|-Wextra|-Wconversion|-Wsign-conversion|-Werror"
-                  -DSOURCE=${INHAND_CONSUMER_SRC}/strict/${source}.cpp
+                  -DSOURCE=${INHAND_CONSUMER_SRC}/${source}.cpp
                   -DOUTPUT=${INHAND_CONSUMER_BIN}/pkg_config_${name}/consumer
                   -P ${INHAND_CONSUMER_DRIVER})
         set_tests_properties(consumer.pkg_config_${name} PROPERTIES
