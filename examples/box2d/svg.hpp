@@ -122,7 +122,7 @@ inline std::vector<Vec2> object_outline(const ObjectSpec& o, const Pose<double, 
 
 /// The scene at one tick: truth geometry from the world, contacts as sensed.
 inline std::string scene_svg(const TickRecord& r, const std::string& title) {
-  const PlanarWorld& w = *r.world;
+  const PlanarWorld& w = *r.plant;
   SvgWriter svg(-12.0, -9.0, 12.0, 7.0, 30.0);
   // The palm (the finger bases' line), the object with an orientation mark (its body
   // x axis), then the desired pose dashed on top.

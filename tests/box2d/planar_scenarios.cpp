@@ -64,7 +64,7 @@ struct Observed {
 b2d::ScenarioResult run_observed(const b2d::ScenarioSpec& spec, Observed& o) {
   return b2d::ScenarioRunner{}.run(spec, [&](const b2d::TickRecord& r) {
     const b2d::StageSpec& st = spec.stages[static_cast<std::size_t>(r.stage)];
-    const b2d::PlanarWorld& w = *r.world;
+    const b2d::PlanarWorld& w = *r.plant;
     const double angle = inhand::so2_log<double>(r.actual->rotation);
     if (st.name == "translate_x") {
       o.max_x = std::max(o.max_x, r.actual->position.x());
@@ -266,7 +266,7 @@ FaultRun run_fault(const b2d::ScenarioSpec& spec) {
     const double ts = rec.stage_time;  // end of the tick
     const bool near = st.name == fs.stage && ts > fs.at && ts <= fs.at + fs.duration + 0.05;
     (near ? f.gate_warnings_inside : f.gate_warnings_outside) += gate ? 1 : 0;
-    f.max_speed = std::max(f.max_speed, rec.world->object_velocity().norm());
+    f.max_speed = std::max(f.max_speed, rec.plant->object_velocity().norm());
   });
   return f;
 }

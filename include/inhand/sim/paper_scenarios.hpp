@@ -5,8 +5,8 @@
 
 #include <string>
 
+#include "inhand/sim/hand_plant_scenario.hpp"
 #include "inhand/sim/presets.hpp"
-#include "inhand/sim/scenario_spec.hpp"
 
 namespace inhand::plant {
 

@@ -1,7 +1,7 @@
-// Closed-loop scenarios on the analytic plant: the specification (scenario_spec.hpp),
-// the runner (scenario_runner.hpp) and the paper's experiments (paper_scenarios.hpp).
+// Closed-loop scenarios on the analytic plant: the generic specification and runner
+// (scenario_spec.hpp, scenario_runner.hpp) with the plant's adapter
+// (hand_plant_scenario.hpp), and the paper's experiments (paper_scenarios.hpp).
 #pragma once
 
+#include "inhand/sim/hand_plant_scenario.hpp"
 #include "inhand/sim/paper_scenarios.hpp"
-#include "inhand/sim/scenario_runner.hpp"
-#include "inhand/sim/scenario_spec.hpp"
