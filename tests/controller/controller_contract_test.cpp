@@ -23,7 +23,7 @@ struct FixedDouble {
   }
 };
 struct BoundedMixedDof {  // 4-joint fingers and a 5-joint thumb in fixed storage
-  using Ctrl = inhand::ReactiveController<double, 3, 5, Dynamic, 5>;
+  using Ctrl = inhand::ReactiveController<double, 3, 4, Dynamic, 5>;
   static inhand_rob::Rig<Ctrl> make() {
     return inhand_rob::preset_rig<Ctrl>(inhand::plant::shadow_like_hand());
   }

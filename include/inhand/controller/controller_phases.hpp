@@ -158,8 +158,10 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
   out.commanded_twist.setZero();
   out.feedforward_twist.setZero();
   out.pose_error.setZero();
+  // Complete once every finger has been placed for settle_time (with settle_time 0: on
+  // the first tick every finger is placed, never before).
   st.settled_time = all_placed ? st.settled_time + t.dt : Scalar(0);
-  if (st.settled_time >= g.settle_time) st.phase = ControllerPhase::grasped;
+  if (all_placed && st.settled_time >= g.settle_time) st.phase = ControllerPhase::grasped;
   return st.phase == ControllerPhase::grasped ? ControllerStatus::grasped
                                               : ControllerStatus::grasping;
 }
