@@ -4,8 +4,11 @@
 # GoogleTest (cmake/inhandOptionalPackages.cmake says which is missing). Label mujoco.
 #   mujoco_chains      the chains read from the compiled model against MuJoCo's own
 #                      kinematics (fingertip positions and Jacobians, random configurations)
+#   mujoco_cylinder    the paper's cylinder translation in closed loop on the MJCF hand
+#                      (the case with the paper's bounds is disabled: the grasp does not
+#                      complete on MuJoCo yet; the file gives the figures)
 if(mujoco_FOUND AND GTest_FOUND)
-  foreach(name IN ITEMS mujoco_chains)
+  foreach(name IN ITEMS mujoco_chains mujoco_cylinder)
     add_executable(${name} ${CMAKE_CURRENT_LIST_DIR}/${name}.cpp)
     target_include_directories(${name} PRIVATE
       ${CMAKE_CURRENT_SOURCE_DIR} ${PROJECT_SOURCE_DIR}/examples/mujoco)
