@@ -12,6 +12,8 @@
 #   CLI11          examples/scenario, examples/campaign, examples/box2d (and the tests
 #                  that run them)
 #   box2d          examples/box2d, tests/box2d
+#   mujoco         examples/mujoco, tests/mujoco (Debian's libmujoco-dev 2.2.2; its config
+#                  also needs OpenGL and the qhull headers, see scripts/lib/packages.sh)
 
 # inhand_find_optional_package(<package> <what needs it> [find_package arguments...])
 macro(inhand_find_optional_package package what)
@@ -44,6 +46,8 @@ if(INHAND_BUILD_EXAMPLES)
 endif()
 if(INHAND_BUILD_TESTS OR INHAND_BUILD_EXAMPLES)
   inhand_find_optional_package(box2d "the Box2D demo and its tests" CONFIG)
+  inhand_find_optional_package(mujoco "the MuJoCo hands (examples/mujoco) and their tests"
+    CONFIG)
 endif()
 
 # What the example programs that tests run will be built.

@@ -3,7 +3,7 @@
 #
 # Keep this the ONE list of system dependencies. Eigen is the library's only
 # dependency; the rest serve the tests (GoogleTest, Orocos KDL as a reference),
-# benchmarks, examples (Box2D, JSON, CLI11), plots (gnuplot), the robustness stages
+# benchmarks, examples (Box2D, MuJoCo, JSON, CLI11), plots (gnuplot), the robustness stages
 # (valgrind, clang with libFuzzer) and the build itself.
 
 INHAND_PACKAGES=(
@@ -24,6 +24,12 @@ INHAND_PACKAGES=(
   nlohmann-json3-dev
   libcli11-dev
   gnuplot-nox
+  # MuJoCo (examples/mujoco, tests/mujoco): its CMake config needs OpenGL (libgl-dev,
+  # libopengl-dev) and names the qhull headers' folder (libqhull-dev) as an include path
+  libmujoco-dev
+  libqhull-dev
+  libgl-dev
+  libopengl-dev
   # robustness stages of scripts/test and scripts/fuzz: memcheck, clang + libFuzzer
   valgrind
   clang-14

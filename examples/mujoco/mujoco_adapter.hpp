@@ -1,0 +1,213 @@
+// A MuJoCo world (a hand and a free object, compiled from MJCF: models/) behind the
+// generic scenario runner's plant interface (inhand/sim/plant_interface.hpp). The
+// controller reads only what a real hand has:
+//   joint angles  : the hinges' qpos (exact);
+//   object pose   : the object's free joint qpos (position, quaternion w x y z; exact);
+//   tactile       : per fingertip geom, its contacts with the object's geoms in
+//                   mjData::contact: the point (contact.pos, midway between the two
+//                   surfaces), the normal and the normal force (mj_contactForce, first
+//                   component, >= 0). MuJoCo's contact frame normal points from geom1 to
+//                   geom2; inhand wants the object's OUTWARD normal, towards the fingertip,
+//                   so it is negated when the fingertip is geom1. With several contacts on
+//                   one fingertip the forces add and the strongest gives point and normal.
+//                   Touching: normal force above `touch_threshold` (N).
+// Commands: joint-velocity targets [rad/s] into mjData::ctrl of each joint's velocity
+// actuator (the servo of the model, clipped to its ctrlrange).
+// Frozen object (the grasp stage, as in the paper): a weld equality of the model between
+// the object and the world (MujocoSetup::object_hold), switched on and off through
+// mjModel::eq_active. It holds the object at its compile-time pose (qpos0: the only
+// pose the runner freezes it at, before the grasp) as a stiff soft constraint (solref
+// 2 ms against the contacts' 20 ms), solved with the contacts, so that every force stays
+// MuJoCo's (measured: the object moves 13 um while the hand closes on it).
+// Putting the free joint back after each step was tried first; it made no difference to
+// the contact chatter reported in tests/mujoco/mujoco_cylinder.cpp, and it teleports the
+// object under the contact solver, so the weld is kept.
+// Each control tick runs period / timestep engine steps (mj_step), then mj_forward so that
+// contacts and forces read by the next sense() belong to the state after the tick.
+// Truth: touching and normal force as sensed (MuJoCo is exact); slip is not measured
+// (slip_distance 0); link_contacts counts ticks on which a non-fingertip hand geom
+// touched the object. Units SI (m, rad, N, s), MuJoCo's world frame.
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <cmath>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "inhand/sim/hand_plant_scenario.hpp"
+#include "inhand/sim/plant_interface.hpp"
+#include "inhand/sim/presets.hpp"
+#include "mujoco_chains.hpp"
+#include "mujoco_model.hpp"
+
+namespace inhand::mujoco_demo {
+
+/// The MuJoCo world's part of a scenario.
+struct MujocoSetup {
+  std::string model_file = model_path("three_finger_cylinder.xml");
+  /// Per finger, the palm body and the fingertip geom, in the preset's finger order.
+  std::vector<FingerNames> fingers = {
+      {"palm", "left_tip"}, {"palm", "right_tip"}, {"palm", "thumb_tip"}};
+  std::string object_body = "object";
+  /// The weld equality (to the world) that freezes the object: see the file comment.
+  std::string object_hold = "object_hold";
+  /// Approach geometry, open configuration and thumb of the hand (not its kinematics,
+  /// which are read from the model).
+  plant::HandPreset hand = plant::three_finger_hand();
+  double touch_threshold = 0.02;  ///< N
+};
+
+class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSetup, mjModel> {
+ public:
+  static constexpr sim::FaultConventions fault_conventions{0.0, false, 0.0};
+  using JointVector = MujocoChain::JointVector;
+
+  explicit MujocoAdapter(const Setup& s)
+      : setup_(s), model_(load_model(s.model_file)), data_(make_data(model_.get())) {
+    const mjModel* m = model_.get();
+    if (s.fingers.size() != s.hand.fingers.size())
+      throw std::invalid_argument("mujoco: finger names and hand preset differ in count");
+    object_ = mj_name2id(m, mjOBJ_BODY, s.object_body.c_str());
+    if (object_ < 0 || m->body_jntnum[object_] != 1 ||
+        m->jnt_type[m->body_jntadr[object_]] != mjJNT_FREE)
+      throw std::invalid_argument("mujoco: " + s.object_body + " is not a body with a free joint");
+    object_qpos_ = m->jnt_qposadr[m->body_jntadr[object_]];
+    hold_ = mj_name2id(m, mjOBJ_EQUALITY, s.object_hold.c_str());
+    if (hold_ < 0 || m->eq_type[hold_] != mjEQ_WELD)
+      throw std::invalid_argument("mujoco: no weld equality " + s.object_hold);
+    chains_ = finger_chains(m, s.fingers);
+    for (std::size_t i = 0; i < s.fingers.size(); ++i) {
+      Finger f;
+      f.tip = mj_name2id(m, mjOBJ_GEOM, s.fingers[i].tip_geom.c_str());
+      f.qpos = finger_qpos_addresses(m, s.fingers[i]);
+      for (int adr : f.qpos) f.actuator.push_back(actuator_of(adr));
+      fingers_.push_back(f);
+      const JointVector& q = s.hand.open_configuration[i];
+      for (int j = 0; j < q.size(); ++j) data_->qpos[f.qpos[static_cast<std::size_t>(j)]] = q(j);
+    }
+    mj_forward(m, data_.get());
+  }
+
+  Controller::Config controller_config(Controller::Config base) const {
+    base = plant::controller_config_for(setup_.hand, base);
+    for (std::size_t i = 0; i < chains_.size(); ++i) base.fingers[i].chain = chains_[i];
+    return base;
+  }
+  std::vector<GraspTarget<double, 3>> grasp_targets() const {
+    return plant::model_free_grasp_targets(setup_.hand, object_pose());
+  }
+  int finger_count() const noexcept { return static_cast<int>(fingers_.size()); }
+
+  void sense() noexcept {}  // exact sensing: nothing to draw
+  Pose<double, 3> measured_object_pose() const noexcept { return object_pose(); }
+  JointVector joint_positions(int i) const {
+    const Finger& f = fingers_[static_cast<std::size_t>(i)];
+    JointVector q(static_cast<Eigen::Index>(f.qpos.size()));
+    for (std::size_t j = 0; j < f.qpos.size(); ++j)
+      q(static_cast<Eigen::Index>(j)) = data_->qpos[f.qpos[j]];
+    return q;
+  }
+  plant::TactileReading tactile(int i) const noexcept {
+    const Finger& f = fingers_[static_cast<std::size_t>(i)];
+    plant::TactileReading r;
+    double strongest = 0.0, total = 0.0;
+    for (int c = 0; c < data_->ncon; ++c) {
+      const mjContact& con = data_->contact[c];
+      const bool tip1 = con.geom1 == f.tip, tip2 = con.geom2 == f.tip;
+      if (!(tip1 && on_object(con.geom2)) && !(tip2 && on_object(con.geom1))) continue;
+      mjtNum force[6];
+      mj_contactForce(model_.get(), data_.get(), c, force);
+      total += force[0];
+      if (force[0] <= strongest) continue;
+      strongest = force[0];
+      const double sign = tip1 ? -1.0 : 1.0;  // towards the fingertip
+      r.contact_point = Eigen::Vector3d(con.pos[0], con.pos[1], con.pos[2]);
+      r.normal = sign * Eigen::Vector3d(con.frame[0], con.frame[1], con.frame[2]);
+    }
+    if (!(total > setup_.touch_threshold)) return plant::TactileReading{};
+    r.touching = true;
+    r.normal_force = total;
+    return r;
+  }
+
+  void set_object_force(const Eigen::Vector3d& f) noexcept {
+    for (int k = 0; k < 3; ++k) data_->xfrc_applied[6 * object_ + k] = f(k);
+  }
+  template <class V>
+  void command(int i, const V& qd, const sim::TickClock& /*clock*/) noexcept {
+    const Finger& f = fingers_[static_cast<std::size_t>(i)];
+    for (std::size_t j = 0; j < f.actuator.size(); ++j)
+      data_->ctrl[f.actuator[j]] = qd(static_cast<Eigen::Index>(j));
+  }
+  void command_towards_open(int i, double gain) {
+    const JointVector qd =
+        gain * (setup_.hand.open_configuration[static_cast<std::size_t>(i)] - joint_positions(i));
+    command(i, qd, sim::TickClock{});
+  }
+  void step(double dt) {
+    const mjModel* m = model_.get();
+    const long steps = std::max(1L, std::lround(dt / m->opt.timestep));
+    for (long k = 0; k < steps; ++k) mj_step(m, data_.get());
+    mj_forward(m, data_.get());
+    if (link_touching()) ++link_contact_ticks_;
+  }
+  void set_frozen(bool frozen) noexcept { model_->eq_active[hold_] = frozen ? 1 : 0; }
+
+  Pose<double, 3> object_pose() const noexcept {
+    const mjtNum* q = data_->qpos + object_qpos_;
+    Pose<double, 3> p;
+    p.position = Eigen::Vector3d(q[0], q[1], q[2]);
+    p.rotation = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized().toRotationMatrix();
+    return p;
+  }
+  plant::FingerTruth truth(int i) const noexcept {
+    const plant::TactileReading r = tactile(i);
+    plant::FingerTruth t;
+    t.touching = r.touching;
+    t.normal_force = r.normal_force;
+    return t;
+  }
+  int link_contacts() const noexcept { return link_contact_ticks_; }
+  const mjModel& model() const noexcept { return *model_; }
+  const mjData& data() const noexcept { return *data_; }
+
+ private:
+  struct Finger {
+    int tip = -1;
+    std::vector<int> qpos, actuator;
+  };
+  int actuator_of(int qpos_adr) const {
+    const mjModel* m = model_.get();
+    for (int a = 0; a < m->nu; ++a)
+      if (m->actuator_trntype[a] == mjTRN_JOINT &&
+          m->jnt_qposadr[m->actuator_trnid[2 * a]] == qpos_adr)
+        return a;
+    throw std::invalid_argument("mujoco: a finger joint has no actuator");
+  }
+  bool on_object(int geom) const noexcept { return model_->geom_bodyid[geom] == object_; }
+  bool link_touching() const noexcept {
+    for (int c = 0; c < data_->ncon; ++c) {
+      const mjContact& con = data_->contact[c];
+      const int other = on_object(con.geom1) ? con.geom2 : on_object(con.geom2) ? con.geom1 : -1;
+      if (other < 0 || model_->geom_bodyid[other] == 0) continue;
+      bool tip = false;
+      for (const Finger& f : fingers_) tip = tip || f.tip == other;
+      if (!tip) return true;
+    }
+    return false;
+  }
+
+  const Setup& setup_;
+  ModelPtr model_;
+  DataPtr data_;
+  std::vector<MujocoChain> chains_;
+  std::vector<Finger> fingers_;
+  int object_ = -1, object_qpos_ = 0;
+  int hold_ = -1;
+  int link_contact_ticks_ = 0;
+};
+
+}  // namespace inhand::mujoco_demo
