@@ -11,8 +11,16 @@
 //                   so it is negated when the fingertip is geom1. With several contacts on
 //                   one fingertip the forces add and the strongest gives point and normal.
 //                   Touching: normal force above `touch_threshold` (N).
-// Commands: joint-velocity targets [rad/s] into mjData::ctrl of each joint's velocity
-// actuator (the servo of the model, clipped to its ctrlrange).
+// Commands: the hand's servo, as real hands realise a joint-velocity command: the command
+// qd [rad/s] is integrated into a position set-point q_ref at every engine step, and
+// each joint's MuJoCo velocity actuator (torque kv (ctrl - qdot)) receives
+//   ctrl = qd + position_gain (q_ref - q),
+// i.e. torque = kv (qd - qdot) + kv position_gain (q_ref - q): a PD servo of stiffness
+// kv position_gain (1.5 N m/rad with the model's kv 0.05 and the default 30 /s) and
+// damping kv, tracking the integrated command. A pure velocity servo (position_gain 0)
+// holds no position: in contact its joint yields to the contact force at f / kv, the
+// force loop sees a damper rather than a spring, and the grasp chatters (measured in
+// tests/mujoco/mujoco_cylinder.cpp).
 // Frozen object (the grasp stage, as in the paper): a weld equality of the model between
 // the object and the world (MujocoSetup::object_hold), switched on and off through
 // mjModel::eq_active. It holds the object at its compile-time pose (qpos0: the only
@@ -58,6 +66,10 @@ struct MujocoSetup {
   /// which are read from the model).
   plant::HandPreset hand = plant::three_finger_hand();
   double touch_threshold = 0.02;  ///< N
+  /// The hand's servo (see the file comment): joint-velocity command qd realised as
+  /// ctrl = qd + position_gain (q_ref - q), q_ref the integral of qd; 0 leaves a pure
+  /// velocity servo (no position hold). [1/s]
+  double position_gain = 30.0;
 };
 
 class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSetup, mjModel> {
@@ -84,9 +96,11 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
       f.tip = mj_name2id(m, mjOBJ_GEOM, s.fingers[i].tip_geom.c_str());
       f.qpos = finger_qpos_addresses(m, s.fingers[i]);
       for (int adr : f.qpos) f.actuator.push_back(actuator_of(adr));
-      fingers_.push_back(f);
       const JointVector& q = s.hand.open_configuration[i];
       for (int j = 0; j < q.size(); ++j) data_->qpos[f.qpos[static_cast<std::size_t>(j)]] = q(j);
+      f.q_ref.assign(q.data(), q.data() + q.size());
+      f.qd.assign(f.qpos.size(), 0.0);
+      fingers_.push_back(f);
     }
     mj_forward(m, data_.get());
   }
@@ -138,11 +152,13 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
   }
   template <class V>
   void command(int i, const V& qd, const sim::TickClock& /*clock*/) noexcept {
-    const Finger& f = fingers_[static_cast<std::size_t>(i)];
-    for (std::size_t j = 0; j < f.actuator.size(); ++j)
-      data_->ctrl[f.actuator[j]] = qd(static_cast<Eigen::Index>(j));
+    Finger& f = fingers_[static_cast<std::size_t>(i)];
+    for (std::size_t j = 0; j < f.actuator.size(); ++j) f.qd[j] = qd(static_cast<Eigen::Index>(j));
   }
   void command_towards_open(int i, double gain) {
+    // finger_away: the servo's set-point follows the finger (no pull back to q_ref).
+    Finger& f = fingers_[static_cast<std::size_t>(i)];
+    for (std::size_t j = 0; j < f.qpos.size(); ++j) f.q_ref[j] = data_->qpos[f.qpos[j]];
     const JointVector qd =
         gain * (setup_.hand.open_configuration[static_cast<std::size_t>(i)] - joint_positions(i));
     command(i, qd, sim::TickClock{});
@@ -150,7 +166,16 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
   void step(double dt) {
     const mjModel* m = model_.get();
     const long steps = std::max(1L, std::lround(dt / m->opt.timestep));
-    for (long k = 0; k < steps; ++k) mj_step(m, data_.get());
+    const double h = m->opt.timestep;
+    for (long k = 0; k < steps; ++k) {
+      for (Finger& f : fingers_)
+        for (std::size_t j = 0; j < f.actuator.size(); ++j) {
+          f.q_ref[j] += h * f.qd[j];
+          data_->ctrl[f.actuator[j]] =
+              f.qd[j] + setup_.position_gain * (f.q_ref[j] - data_->qpos[f.qpos[j]]);
+        }
+      mj_step(m, data_.get());
+    }
     mj_forward(m, data_.get());
     if (link_touching()) ++link_contact_ticks_;
   }
@@ -178,6 +203,7 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
   struct Finger {
     int tip = -1;
     std::vector<int> qpos, actuator;
+    std::vector<double> q_ref, qd;  ///< rad, rad/s: the servo's set-point and command
   };
   int actuator_of(int qpos_adr) const {
     const mjModel* m = model_.get();
