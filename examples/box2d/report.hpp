@@ -78,14 +78,7 @@ inline examples::Expectations box2d_expectations(const ScenarioSpec& spec, const
 /// pose (after it), and the tactile input / servo output of each finger.
 inline void fill_trace_row(const ScenarioSpec& spec, const TickRecord& rec,
                            examples::TraceRow<2>& row) {
-  row.time = rec.time;
-  row.stage = rec.stage;
-  row.stage_name = spec.stages[static_cast<std::size_t>(rec.stage)].name;
-  row.desired = *rec.desired;
-  row.measured = rec.input->object_pose;
-  row.actual = *rec.actual;
-  examples::fill_trace_fingers<2>(*rec.input, *rec.output, row.fingers);
-  examples::fill_trace_hand<2>(*rec.output, row);
+  examples::fill_trace_row<2>(rec, spec.stages[static_cast<std::size_t>(rec.stage)].name, row);
 }
 
 inline examples::RunSummary run_summary(const ScenarioSpec& spec, const ScenarioResult& r) {

@@ -101,6 +101,21 @@ void fill_trace_hand(const Output& out, Row& row) {
   row.pose_integral = out.pose_error_integral;
 }
 
+/// A whole row for one tick of the scenario runner (a sim::TickRecord of any plant):
+/// desired pose, pose as sensed (before the tick's step), true pose (after it), and the
+/// tactile input / servo output of each finger.
+template <int Dim, typename Record>
+void fill_trace_row(const Record& rec, const std::string& stage_name, TraceRow<Dim>& row) {
+  row.time = rec.time;
+  row.stage = rec.stage;
+  row.stage_name = stage_name;
+  row.desired = *rec.desired;
+  row.measured = rec.input->object_pose;
+  row.actual = *rec.actual;
+  fill_trace_fingers<Dim>(*rec.input, *rec.output, row.fingers);
+  fill_trace_hand<Dim>(*rec.output, row);
+}
+
 /// Letters, digits and '_' only (other characters become '_').
 inline std::string csv_safe_name(const std::string& s) {
   std::string out = s.empty() ? std::string("finger") : s;

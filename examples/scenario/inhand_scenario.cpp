@@ -353,14 +353,7 @@ int run_scenario(const Options& o) {
       if (stage_start[si] < 0.0) stage_start[si] = rec.time;
       force_layer.add(rec.stage, spec.stages[si].name, rec.time - stage_start[si], *rec.output);
       if (trace) {
-        row.time = rec.time;
-        row.stage = rec.stage;
-        row.stage_name = spec.stages[static_cast<std::size_t>(rec.stage)].name;
-        row.desired = *rec.desired;
-        row.measured = rec.input->object_pose;
-        row.actual = *rec.actual;
-        ex::fill_trace_fingers<3>(*rec.input, *rec.output, row.fingers);
-        ex::fill_trace_hand<3>(*rec.output, row);
+        ex::fill_trace_row<3>(rec, spec.stages[si].name, row);
         trace->write(row);
       }
     };
