@@ -33,6 +33,17 @@
 
 namespace inhand {
 
+/// A joint that is not actuated but follows another joint of the same finger (a URDF
+/// mimic joint, a tendon or a linkage): q_follower = ratio * q_leader + offset [rad].
+/// leader < 0: the joint is actuated (the default).
+template <typename Scalar>
+struct JointCoupling {
+  int leader = -1;            ///< index of the leading joint in the same finger, or -1
+  Scalar ratio = Scalar(1);   ///< dq_follower / dq_leader (dimensionless, != 0)
+  Scalar offset = Scalar(0);  ///< rad
+  bool coupled() const noexcept { return leader >= 0; }
+};
+
 /// One revolute joint of a finger.
 template <typename Scalar, int Dim>
 struct JointDescription {
@@ -45,6 +56,8 @@ struct JointDescription {
   Scalar upper = Scalar(3.14159265358979);
   /// Joint velocity limit [rad/s], > 0.
   Scalar max_velocity = Scalar(2);
+  /// Whether this joint follows another (coupling.leader >= 0) or is actuated.
+  JointCoupling<Scalar> coupling{};
 };
 
 namespace detail {
@@ -103,6 +116,12 @@ struct FingerChain {
   Scalar fingertip_radius = Scalar(0.01);
 
   int dof() const noexcept { return static_cast<int>(joints.size()); }
+  /// Number of actuated joints (those that follow no other joint).
+  int actuated_dof() const noexcept {
+    int n = 0;
+    for (int i = 0; i < dof(); ++i) n += joints[i].coupling.coupled() ? 0 : 1;
+    return n;
+  }
 
   JointVector lower_limits() const {
     JointVector v(dof());
@@ -170,6 +189,21 @@ struct FingerChain {
       if (!is_finite(j.max_velocity) || !(j.max_velocity > Scalar(0)))
         return Validation::invalid(name("joints.max_velocity", "fingers.chain.joints.max_velocity"),
                                    "must be finite and > 0", i);
+      if (j.coupling.coupled()) {
+        const int l = j.coupling.leader;
+        if (l >= dof() || l == i || joints[l].coupling.coupled())
+          return Validation::invalid(
+              name("joints.coupling.leader", "fingers.chain.joints.coupling.leader"),
+              "must name another, actuated joint of the same finger", i);
+        if (!is_finite(j.coupling.ratio) || j.coupling.ratio == Scalar(0))
+          return Validation::invalid(
+              name("joints.coupling.ratio", "fingers.chain.joints.coupling.ratio"),
+              "must be finite and non-zero", i);
+        if (!is_finite(j.coupling.offset))
+          return Validation::invalid(
+              name("joints.coupling.offset", "fingers.chain.joints.coupling.offset"),
+              "must be finite", i);
+      }
     }
     return Validation::valid();
   }
