@@ -58,8 +58,9 @@ struct ControllerTypes {
   using Wrench = Eigen::Matrix<Scalar, SpatialDim<Dim>::kTwist, 1>;
 
   struct FingerConfig {
-    /// The finger's kinematics. With KinematicsSource::external only the joint count
-    /// and the joints' max_velocity are used.
+    /// The finger's kinematics. With KinematicsSource::external only the joint count,
+    /// the joints' limits (max_velocity; lower/upper when ik.joint_limits) and their
+    /// couplings are used; the Jacobian given is then that of all joints.
     Chain chain{};
     KinematicsSource kinematics = KinematicsSource::chain;
     FingerRole role = FingerRole::preset;  ///< force-planner role (the thumb: balancing)

@@ -88,7 +88,8 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   Vec force = Vec::Zero();
   if (force_active) force = -sc.forces.velocity(i) * sc.normals.col(i);
   const ControllerWarning w =
-      m.layer3.command(m.jacobian, v, f.contact.normal, force_active ? &force : nullptr,
+      m.layer3.command(m.jacobian, f.joint_positions, v, f.contact.normal,
+                       force_active ? &force : nullptr,
                        t.config.max_joint_acceleration, t.dt, fo);
   m.last_motion = fo.servo.motion;
   fo.stiffness_estimate = st.forces.stiffness_estimate()(i);

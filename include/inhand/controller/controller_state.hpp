@@ -68,7 +68,7 @@ struct ControllerState {
       FingerMemory<Types>& m = fingers[static_cast<std::size_t>(i)];
       m.kinematics.joint_origins.setZero(Dim, fc.chain.dof());
       m.kinematics.joint_axes.setZero(3, fc.chain.dof());
-      m.layer3.configure(fc.chain.velocity_limits(), c.servo, c.ik);
+      m.layer3.configure(fc.chain, c.servo, c.ik);
       m.jacobian.setZero(Dim, fc.chain.dof());
       m.q_prev.setZero(fc.chain.dof());
       planner.set_role(i, fc.role);

@@ -107,6 +107,7 @@ enum class ControllerWarning : unsigned {
   force_integral_limited = 1u << 13,  ///< some force integrator reached its bound
   pose_integral_limited = 1u << 14,   ///< layer 1's pose-error integral reached its bound
   implausible_contact = 1u << 15,     ///< some contact is far from / behind its fingertip
+  joint_position_limited = 1u << 16,  ///< some joint was held at its position limit (IK)
 };
 template <>
 struct is_flags<ControllerWarning> : std::true_type {};

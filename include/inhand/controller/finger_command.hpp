@@ -1,15 +1,23 @@
-// Layer 3, per finger: the hybrid servo (eqs. 4-7), the contact IK (eq. 3) and the
-// command continuity bound (docs/method.md sections 4 and 6).
+// Layer 3, per finger: the hybrid servo (eqs. 4-7), the contact IK (eq. 3) with the
+// joint limits, and the command continuity bound (docs/method.md sections 4 and 6).
 //
 //   e        = g1(v_desired) + force part            (m/s, world frame)
 //   force    = -u n   with u [m/s] from the force layer (into the object along -n;
 //              u > 0 presses harder), or none when the finger does not touch
-//   qdot     = J^+ e  (damped near singularities, scaled to the joint velocity limits)
+//   qdot     = J^+ e  (damped near singularities; joints that would cross their position
+//              limit less ik.joint_limit_margin within dt held and the task re-solved
+//              over the others; then scaled to the joint velocity limits)
 //   |qdot - qdot_last|_inf <= max_joint_acceleration * dt  (the change is scaled,
-//              its direction kept; then clamped back inside the velocity limits)
-// The force part of HybridServo is not used: the force layer's loops replace it, and
-// its motion PI carries the velocity part. noexcept, no allocation (fixed or bounded
-// DOF).
+//              its direction kept; then clamped back inside the velocity limits and
+//              the position box: a joint the continuity bound would carry past its
+//              limit is stopped at it, the limit taking precedence)
+// Coupled joints (JointCoupling): the IK works in actuated coordinates. A leader's
+// column of J gains ratio x its followers' columns, the followers' columns are zero, a
+// leader's velocity and position bounds include its followers' (divided by the ratio),
+// and each follower's velocity is ratio x its leader's, so every command keeps the
+// coupling. The force part of HybridServo is not used: the force layer's loops replace
+// it, and its motion PI carries the velocity part. noexcept, no allocation (fixed or
+// bounded DOF).
 #pragma once
 
 #include <algorithm>
@@ -21,7 +29,7 @@
 
 namespace inhand {
 
-/// The layer-3 state of one finger: servo, IK workspace, last command, velocity limits.
+/// The layer-3 state of one finger: servo, IK workspace, last command, joint limits.
 template <typename Scalar, int Dim, int Dof, int MaxDof = Dof>
 struct FingerServo {
   using JointVector = typename ContactIk<Scalar, Dim, Dof, MaxDof>::JointVector;
@@ -31,26 +39,42 @@ struct FingerServo {
   HybridServo<Scalar, Dim> servo{};
   ContactIk<Scalar, Dim, Dof, MaxDof> ik{};
   JointVector last_command{};  ///< rad/s, the last valid tick's joint velocities
-  JointVector max_velocity{};  ///< rad/s, per joint (> 0)
 
-  /// Sizes and configures (allocates only for run-time DOF without a bound).
-  void configure(const JointVector& velocity_limits, const ServoGains<Scalar>& gains,
+  /// Sizes and configures from the finger's chain (allocates only for run-time DOF
+  /// without a bound).
+  template <typename Chain>
+  void configure(const Chain& chain, const ServoGains<Scalar>& gains,
                  const IkParams<Scalar>& ik_params) {
-    const int dof = static_cast<int>(velocity_limits.size());
+    const int dof = chain.dof();
     ik.set_dof(dof);
     ik.set_params(ik_params);
     servo.set_gains(gains);
     last_command.setZero(dof);
-    max_velocity = velocity_limits;
+    max_velocity_ = chain.velocity_limits();
+    lower_ = chain.lower_limits();
+    upper_ = chain.upper_limits();
+    leader_.setConstant(dof, -1);
+    ratio_.setOnes(dof);
+    for (int i = 0; i < dof; ++i) {
+      leader_(i) = chain.joints[i].coupling.leader;
+      ratio_(i) = chain.joints[i].coupling.ratio;
+    }
+    limits_ = ik_params.joint_limits;
+    margin_ = ik_params.joint_limit_margin;
+    ja_.setZero(Dim, dof);
+    vmax_.setZero(dof);
+    lo_.setZero(dof);
+    hi_.setZero(dof);
   }
 
   /// One tick: contact velocity v [m/s] and force velocity `force` [m/s] (-u n, or zero
-  /// when no force is servoed) at the point whose Jacobian is J; `normal` the measured
-  /// normal (unused by the motion part). Writes the servo command and status, the IK
-  /// report and the joint velocities; returns the warnings raised.
+  /// when no force is servoed) at the point whose Jacobian is J, joint positions q [rad];
+  /// `normal` the measured normal (unused by the motion part). Writes the servo command
+  /// and status, the IK report and the joint velocities; returns the warnings raised.
   template <typename FingerOutput>
-  ControllerWarning command(const Jacobian& J, const Vec& v, const Vec& normal, const Vec* force,
-                            Scalar max_joint_acceleration, Scalar dt, FingerOutput& fo) noexcept {
+  ControllerWarning command(const Jacobian& J, const JointVector& q, const Vec& v,
+                            const Vec& normal, const Vec* force, Scalar max_joint_acceleration,
+                            Scalar dt, FingerOutput& fo) noexcept {
     ControllerWarning w = ControllerWarning::none;
     fo.servo_status = servo.update(v, Scalar(0), Scalar(0), normal, false, dt, fo.servo);
     if (force != nullptr) {
@@ -58,24 +82,80 @@ struct FingerServo {
       fo.servo.total = fo.servo.motion + fo.servo.force;
     }
     if (fo.servo_status != ServoStatus::ok) w |= ControllerWarning::servo_saturated;
-    fo.ik = ik.solve(J, fo.servo.total, max_velocity, fo.joint_velocities);
+    actuated_problem(J, q, dt);
+    if (limits_)
+      fo.ik = ik.solve(ja_, fo.servo.total, vmax_, lo_, hi_, fo.joint_velocities);
+    else
+      fo.ik = ik.solve(ja_, fo.servo.total, vmax_, fo.joint_velocities);
+    follow_leaders(fo.joint_velocities);
     if (has(fo.ik.status, IkStatus::damped)) w |= ControllerWarning::ik_damped;
     if (has(fo.ik.status, IkStatus::limited)) w |= ControllerWarning::joint_velocity_limited;
+    if (has(fo.ik.status, IkStatus::position_limited))
+      w |= ControllerWarning::joint_position_limited;
     const Scalar max_step = max_joint_acceleration * dt;
     if (max_step < std::numeric_limits<Scalar>::infinity()) {
       const Scalar largest = (fo.joint_velocities - last_command).cwiseAbs().maxCoeff();
       if (largest > max_step) {
         fo.joint_velocities =
             last_command + (max_step / largest) * (fo.joint_velocities - last_command);
-        // A convex combination of two commands within the joint limits: only rounding
-        // can leave them; clamp it away (this only shrinks the step).
-        fo.joint_velocities = fo.joint_velocities.cwiseMin(max_velocity).cwiseMax(-max_velocity);
+        // A convex combination of two commands within the velocity limits: only rounding
+        // can leave them; clamp it away (this only shrinks the step). The position box
+        // may be left (last tick's command was for last tick's box): stop there.
+        fo.joint_velocities = fo.joint_velocities.cwiseMin(vmax_).cwiseMax(-vmax_);
+        if (limits_) {
+          for (int i = 0; i < static_cast<int>(lo_.size()); ++i) {
+            const Scalar c = std::min(std::max(fo.joint_velocities(i), lo_(i)), hi_(i));
+            if (c != fo.joint_velocities(i)) w |= ControllerWarning::joint_position_limited;
+            fo.joint_velocities(i) = c;
+          }
+        }
+        follow_leaders(fo.joint_velocities);
         w |= ControllerWarning::rate_limited;
       }
     }
     last_command = fo.joint_velocities;
     return w;
   }
+
+ private:
+  /// ja_, vmax_, lo_, hi_: this tick's problem in actuated coordinates (followers'
+  /// columns zero and bounds 0, folded into their leaders).
+  void actuated_problem(const Jacobian& J, const JointVector& q, Scalar dt) noexcept {
+    ja_ = J;
+    vmax_ = max_velocity_;
+    if (limits_) joint_position_box(q, lower_, upper_, margin_, dt, lo_, hi_);
+    for (int i = 0; i < static_cast<int>(leader_.size()); ++i) {
+      const int l = leader_(i);
+      if (l < 0) continue;
+      const Scalar r = ratio_(i);
+      ja_.col(l) += r * J.col(i);
+      ja_.col(i).setZero();
+      vmax_(l) = std::min(vmax_(l), max_velocity_(i) / std::abs(r));
+      vmax_(i) = std::numeric_limits<Scalar>::infinity();
+      if (limits_) {
+        const Scalar a = lo_(i) / r, b = hi_(i) / r;  // r < 0 swaps them
+        lo_(l) = std::max(lo_(l), std::min(a, b));
+        hi_(l) = std::min(hi_(l), std::max(a, b));
+        lo_(i) = hi_(i) = Scalar(0);
+      }
+    }
+  }
+  /// Each follower's velocity from its leader's.
+  void follow_leaders(JointVector& qd) const noexcept {
+    for (int i = 0; i < static_cast<int>(leader_.size()); ++i)
+      if (leader_(i) >= 0) qd(i) = ratio_(i) * qd(leader_(i));
+  }
+
+  using IndexVector = Eigen::Matrix<int, Dof, 1, Eigen::ColMajor, MaxDof, 1>;
+  JointVector max_velocity_{};     ///< rad/s, per joint (> 0)
+  JointVector lower_{}, upper_{};  ///< rad, position limits
+  IndexVector leader_{};           ///< per joint: its leader, or -1 (actuated)
+  JointVector ratio_{};            ///< per joint: its coupling ratio
+  bool limits_ = true;
+  Scalar margin_ = Scalar(0);
+  // This tick's actuated problem (written and read within command()).
+  Jacobian ja_{};
+  JointVector vmax_{}, lo_{}, hi_{};
 };
 
 }  // namespace inhand

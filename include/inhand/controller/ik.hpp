@@ -10,15 +10,27 @@
 // Joint-velocity limits: if any |theta_dot_i| exceeds its limit, the WHOLE vector is
 // scaled by the largest factor s in (0, 1] that respects every limit, so the direction
 // of the Cartesian motion is kept; the status says `limited` and reports s.
-// Invalid input (non-finite J, x_dot, limits or z, or finite values so large that the
-// solution overflows, e.g. |J|^2 > the largest Scalar): theta_dot = 0, status
+// Joint position limits (the overload taking a box): lo <= theta_dot <= hi [rad/s] with
+// lo <= 0 <= hi, the velocities that keep each joint inside its limits over the tick
+// (joint_position_box()). If the solution above leaves the box, the joints that would
+// cross are held at their bound and the task is re-solved over the others: the result
+// minimises |J theta_dot - x_dot|^2 + lambda^2 |theta_dot|^2 over the box
+// (math/box_least_squares.hpp), so the contact velocity is still met whenever the free
+// joints can meet it; the null-space term is then dropped. The status says
+// `position_limited`; the report names the held joints (bit i = joint i) and the task
+// error left. Whenever the solution is inside the box it is returned unchanged. The
+// velocity scaling below follows and keeps the box (it only shrinks towards 0).
+// Invalid input (non-finite J, x_dot, limits, box or z, or finite values so large that
+// the solution overflows, e.g. |J|^2 > the largest Scalar): theta_dot = 0, status
 // invalid_input.
 // Units: x_dot in m/s, theta_dot in rad/s. noexcept; fixed sizes never allocate.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
+#include "inhand/math/box_least_squares.hpp"
 #include "inhand/math/damped_least_squares.hpp"
 #include "inhand/math/flags.hpp"
 
@@ -30,7 +42,8 @@ enum class IkStatus : unsigned {
   damped = 1u << 0,   ///< sigma_min below the threshold: damped least squares used
   limited = 1u << 1,  ///< joint velocities scaled down to respect their limits
   damped_and_limited = 3u,
-  invalid_input = 1u << 2,  ///< non-finite input; output is zero
+  invalid_input = 1u << 2,     ///< non-finite input; output is zero
+  position_limited = 1u << 3,  ///< joints held at their position limits (see held_joints)
 };
 template <>
 struct is_flags<IkStatus> : std::true_type {};
@@ -46,8 +59,19 @@ inline const char* to_string(IkStatus s) noexcept {
       return "damped_and_limited";
     case IkStatus::invalid_input:
       return "invalid_input";
+    case IkStatus::position_limited:
+      return "position_limited";
   }
-  return "unknown";
+  switch (static_cast<unsigned>(s)) {
+    case 9u:
+      return "damped_and_position_limited";
+    case 10u:
+      return "limited_and_position_limited";
+    case 11u:
+      return "damped_limited_and_position_limited";
+    default:
+      return "unknown";
+  }
 }
 
 template <typename Scalar>
@@ -56,13 +80,34 @@ struct IkReport {
   Scalar min_singular_value = Scalar(0);  ///< sigma_min of J (m/rad)
   Scalar damping = Scalar(0);             ///< lambda used (0 when not damped)
   Scalar limit_scale = Scalar(1);         ///< s applied for the velocity limits
+  std::uint32_t held_joints = 0;          ///< bit i: joint i held at its position limit (i < 32)
+  Scalar task_error = Scalar(0);          ///< |J theta_dot - x_dot| [m/s] of the returned command
 };
+
+/// The joint-velocity box [rad/s] that keeps joint positions q inside
+/// [lower + margin, upper - margin] over a tick of dt seconds: a joint inside may move
+/// up to its bound, a joint already beyond it may not move further out (its bound is 0),
+/// so lo <= 0 <= hi always. All vectors of one size; dt > 0, margin >= 0 (rad).
+template <typename JointVector, typename Scalar>
+void joint_position_box(const JointVector& q, const JointVector& lower, const JointVector& upper,
+                        Scalar margin, Scalar dt, JointVector& lo, JointVector& hi) noexcept {
+  for (int i = 0; i < static_cast<int>(q.size()); ++i) {
+    lo(i) = std::min(Scalar(0), (lower(i) + margin - q(i)) / dt);
+    hi(i) = std::max(Scalar(0), (upper(i) - margin - q(i)) / dt);
+  }
+}
 
 template <typename Scalar>
 struct IkParams {
   DampingSchedule<Scalar> damping{};
+  /// Joint position limits (FingerChain joints' lower/upper) enforced in the controller's
+  /// IK with this margin [rad] inside each limit; false: only the velocity limits act.
+  bool joint_limits = true;
+  Scalar joint_limit_margin = Scalar(0.01);
   /// Field names relative to the controller Config ("ik.damping.max_damping").
   Validation validate() const noexcept {
+    if (!is_finite(joint_limit_margin) || !(joint_limit_margin >= Scalar(0)))
+      return Validation::invalid("ik.joint_limit_margin", "must be finite and >= 0");
     return damping.validate(
         DampingScheduleNames{"ik.damping.singular_threshold", "ik.damping.max_damping"});
   }
@@ -86,13 +131,14 @@ class ContactIk {
   // when a ContactIk is value-initialised inside an aggregate such as std::array.
   explicit ContactIk(int dof = (N == Eigen::Dynamic ? 0 : N),
                      const IkParams<Scalar>& params = IkParams<Scalar>())
-      : params_(params), dls_(dof) {
+      : params_(params), dls_(dof), box_(dof) {
     ns_.setZero(dof);
     pinv_.setZero(dof, Dim);
   }
   /// Re-sizes in place for a finger with `dof` joints (run-time DOF only).
   void set_dof(int dof) {
     dls_.set_cols(dof);
+    box_.set_cols(dof);
     ns_.setZero(dof);
     pinv_.setZero(dof, Dim);
   }
@@ -105,14 +151,21 @@ class ContactIk {
   /// (rad/s, > 0; +inf for none).
   IkReport<Scalar> solve(const Jacobian& J, const CartesianVector& x_dot,
                          const JointVector& max_velocity, JointVector& theta_dot) noexcept {
-    return solve_impl(J, x_dot, max_velocity, nullptr, theta_dot);
+    return solve_impl(J, x_dot, max_velocity, nullptr, theta_dot, nullptr, nullptr);
   }
   /// As solve(), adding the null-space projection of `null_space_velocity` (n > m only;
   /// for n <= m the null space is empty and the term is ignored).
   IkReport<Scalar> solve(const Jacobian& J, const CartesianVector& x_dot,
                          const JointVector& max_velocity, const JointVector& null_space_velocity,
                          JointVector& theta_dot) noexcept {
-    return solve_impl(J, x_dot, max_velocity, &null_space_velocity, theta_dot);
+    return solve_impl(J, x_dot, max_velocity, &null_space_velocity, theta_dot, nullptr, nullptr);
+  }
+  /// As solve(), keeping theta_dot inside the box [lo, hi] (rad/s, lo <= 0 <= hi; see
+  /// joint_position_box()) as described at the top of this file.
+  IkReport<Scalar> solve(const Jacobian& J, const CartesianVector& x_dot,
+                         const JointVector& max_velocity, const JointVector& lo,
+                         const JointVector& hi, JointVector& theta_dot) noexcept {
+    return solve_impl(J, x_dot, max_velocity, nullptr, theta_dot, &lo, &hi);
   }
 
   /// The (damped, per the schedule) pseudo-inverse J^+ that solve() applies.
@@ -142,10 +195,13 @@ class ContactIk {
  private:
   IkReport<Scalar> solve_impl(const Jacobian& J, const CartesianVector& x_dot,
                               const JointVector& max_velocity, const JointVector* z,
-                              JointVector& theta_dot) noexcept {
+                              JointVector& theta_dot, const JointVector* lo,
+                              const JointVector* hi) noexcept {
     IkReport<Scalar> report;
+    const bool boxed = lo != nullptr && hi != nullptr;
     if (!all_finite(J) || !all_finite(x_dot) || (z != nullptr && !all_finite(*z)) ||
-        !((max_velocity.array() > Scalar(0)).all()) || max_velocity.hasNaN()) {
+        !((max_velocity.array() > Scalar(0)).all()) || max_velocity.hasNaN() ||
+        (boxed && !box_valid(*lo, *hi, static_cast<int>(J.cols())))) {
       theta_dot.setZero();
       report.status = IkStatus::invalid_input;
       return report;
@@ -172,6 +228,12 @@ class ContactIk {
       report.status = IkStatus::invalid_input;
       return report;
     }
+    if (boxed &&
+        !((theta_dot.array() >= lo->array()).all() && (theta_dot.array() <= hi->array()).all())) {
+      const auto held = box_.solve(J, x_dot, report.damping * report.damping, *lo, *hi, theta_dot);
+      report.held_joints = held.held;
+      if (held.held != 0) report.status = report.status | IkStatus::position_limited;
+    }
     Scalar s = Scalar(1);
     for (int i = 0; i < theta_dot.size(); ++i) {
       const Scalar a = std::abs(theta_dot(i));
@@ -186,11 +248,19 @@ class ContactIk {
       report.status = report.status | IkStatus::limited;
     }
     report.limit_scale = s;
+    report.task_error = (J * theta_dot - x_dot).norm();
     return report;
+  }
+
+  /// A box [lo, hi] of this solver's size, finite, with lo <= 0 <= hi.
+  static bool box_valid(const JointVector& lo, const JointVector& hi, int n) noexcept {
+    return lo.size() == n && hi.size() == n && all_finite(lo) && all_finite(hi) &&
+           (lo.array() <= Scalar(0)).all() && (hi.array() >= Scalar(0)).all();
   }
 
   IkParams<Scalar> params_;
   DampedLeastSquares<Scalar, Dim, N, MaxN> dls_;
+  BoxLeastSquares<Scalar, Dim, N, MaxN> box_;
   JointVector ns_;
   PseudoInverse pinv_;
 };

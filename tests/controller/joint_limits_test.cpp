@@ -1,0 +1,372 @@
+// Joint position limits and coupled joints in layer 3 (controller/ik.hpp,
+// math/box_least_squares.hpp, controller/finger_command.hpp):
+//  - the box-constrained solve reaches the least objective the box allows, checked
+//    against a brute-force enumeration of every held set (3^n of them);
+//  - a seeded sweep of ContactIk calls near and at the limits never commands a joint
+//    across its limit less the margin within the tick, returns the unconstrained
+//    solution bit for bit whenever that is inside the box, and flags the held joints;
+//  - a finger whose distal joint follows the middle one commands both in ratio and
+//    still meets the contact velocity; in a closed loop a joint driven at its limit
+//    stops at the limit less the margin, with the continuity bound active;
+//  - the configuration checks name the coupling and margin fields.
+#include <gtest/gtest.h>
+
+#include <Eigen/QR>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "common/test_support.hpp"
+#include "inhand/controller/finger_command.hpp"
+#include "inhand/controller/ik.hpp"
+#include "inhand/math/box_least_squares.hpp"
+
+namespace {
+
+using Eigen::Dynamic;
+using inhand::IkStatus;
+using inhand_test::make_rng;
+using inhand_test::scaled;
+using inhand_test::uniform;
+using MatXd = Eigen::MatrixXd;
+using VecXd = Eigen::VectorXd;
+
+/// |J z - b|^2 + lambda2 |z|^2.
+double objective(const MatXd& J, const VecXd& b, double lambda2, const VecXd& z) {
+  return (J * z - b).squaredNorm() + lambda2 * z.squaredNorm();
+}
+
+/// The least objective over the box by enumeration: for every assignment of each
+/// coordinate to {free, lower, upper}, the minimum-norm optimum over the free ones
+/// (complete orthogonal decomposition of [J_F; lambda I]); the best feasible one.
+double brute_force_minimum(const MatXd& J, const VecXd& b, double lambda2, const VecXd& lo,
+                           const VecXd& hi) {
+  const int n = static_cast<int>(J.cols()), m = static_cast<int>(J.rows());
+  int patterns = 1;
+  for (int i = 0; i < n; ++i) patterns *= 3;
+  double best = std::numeric_limits<double>::infinity();
+  for (int p = 0; p < patterns; ++p) {
+    VecXd z = VecXd::Zero(n);
+    std::vector<int> free;
+    int code = p;
+    for (int i = 0; i < n; ++i, code /= 3) {
+      if (code % 3 == 0) free.push_back(i);
+      if (code % 3 == 1) z(i) = lo(i);
+      if (code % 3 == 2) z(i) = hi(i);
+    }
+    const int k = static_cast<int>(free.size());
+    if (k > 0) {
+      MatXd A = MatXd::Zero(m + k, k);
+      VecXd r = VecXd::Zero(m + k);
+      r.head(m) = b - J * z;
+      for (int c = 0; c < k; ++c) {
+        A.block(0, c, m, 1) = J.col(free[static_cast<std::size_t>(c)]);
+        A(m + c, c) = std::sqrt(lambda2);
+      }
+      const VecXd zf = A.completeOrthogonalDecomposition().solve(r);
+      for (int c = 0; c < k; ++c) z(free[static_cast<std::size_t>(c)]) = zf(c);
+    }
+    const double slack = 1e-12 * (1.0 + hi.cwiseAbs().maxCoeff() + lo.cwiseAbs().maxCoeff());
+    if (((z - lo).array() >= -slack).all() && ((hi - z).array() >= -slack).all())
+      best = std::min(best, objective(J, b, lambda2, z));
+  }
+  return best;
+}
+
+/// A random box with lo <= 0 <= hi; some bounds are exactly 0 (a joint at its limit).
+VecXd random_bound(inhand_test::Rng& rng, int n, double sign) {
+  VecXd v(n);
+  for (int i = 0; i < n; ++i)
+    v(i) = uniform(rng, 0.0, 1.0) < 0.2 ? 0.0 : sign * uniform(rng, 0.0, 1.0);
+  return v;
+}
+
+template <int M>
+void check_box_least_squares_against_brute_force(std::uint64_t seed) {
+  auto rng = make_rng(seed);
+  const int cases = scaled(400);
+  double worst = 0.0;
+  for (int c = 0; c < cases; ++c) {
+    const int n = 1 + c % 5;
+    MatXd J = MatXd::Random(M, n);
+    if (c % 7 == 0 && n > 1) J.col(n - 1) = J.col(0) * uniform(rng, -2.0, 2.0);  // degenerate
+    const VecXd b = VecXd::Random(M) * uniform(rng, 0.1, 3.0);
+    const double lambda2 = c % 3 == 0 ? uniform(rng, 0.0, 0.3) : 0.0;
+    const VecXd lo = random_bound(rng, n, -1.0), hi = random_bound(rng, n, 1.0);
+    inhand::BoxLeastSquares<double, M, Dynamic, 5> box(n);
+    Eigen::Matrix<double, M, Dynamic, Eigen::ColMajor, M, 5> Jf = J;
+    Eigen::Matrix<double, Dynamic, 1, Eigen::ColMajor, 5, 1> z, lof = lo, hif = hi;
+    const auto res = box.solve(Jf, Eigen::Matrix<double, M, 1>(b), lambda2, lof, hif, z);
+    ASSERT_TRUE(res.converged) << "case " << c;
+    ASSERT_TRUE(((z.array() >= lof.array()) && (z.array() <= hif.array())).all()) << "case " << c;
+    const double ours = objective(J, b, lambda2, z);
+    const double best = brute_force_minimum(J, b, lambda2, lo, hi);
+    const double tol = 1e-10 * (1.0 + b.squaredNorm());
+    ASSERT_LE(ours, best + tol) << "case " << c << " n " << n << " lambda2 " << lambda2;
+    worst = std::max(worst, ours - best);
+    // The held bits name exactly the coordinates at a bound with a free one inside.
+    for (int i = 0; i < n; ++i) {
+      const bool held = (res.held >> i) & 1u;
+      if (!held) continue;
+      ASSERT_TRUE(z(i) == lof(i) || z(i) == hif(i)) << "case " << c << " joint " << i;
+    }
+  }
+  inhand_test::record("box_least_squares_excess_over_brute_force_" + std::to_string(M), worst);
+}
+
+TEST(BoxLeastSquares, ReachesTheBruteForceMinimumThreeRows) {
+  check_box_least_squares_against_brute_force<3>(11);
+}
+TEST(BoxLeastSquares, ReachesTheBruteForceMinimumTwoRows) {
+  check_box_least_squares_against_brute_force<2>(12);
+}
+
+TEST(BoxLeastSquares, InsideTheBoxIsTheUnconstrainedSolution) {
+  inhand::BoxLeastSquares<double, 3, 4> box;
+  Eigen::Matrix<double, 3, 4> J;
+  J << 1, 0, 0.5, 0, 0, 1, 0, 0.3, 0, 0, 1, 1;
+  const Eigen::Vector3d b(0.01, -0.02, 0.005);
+  const Eigen::Vector4d lo = Eigen::Vector4d::Constant(-1), hi = Eigen::Vector4d::Constant(1);
+  Eigen::Vector4d z;
+  const auto res = box.solve(J, b, 0.0, lo, hi, z);
+  EXPECT_EQ(res.held, 0u);
+  EXPECT_EQ(res.iterations, 0);
+  const Eigen::Vector4d expected = J.transpose() * (J * J.transpose()).ldlt().solve(b);
+  EXPECT_LT((z - expected).norm(), 1e-14);
+}
+
+// ---- ContactIk with the position box -------------------------------------------------
+
+struct Sweep {
+  int calls = 0, limited = 0, equal_unconstrained = 0, brute_checked = 0;
+};
+
+/// Random contact Jacobians of n columns and joints near, at or beyond their limits.
+template <int N>
+Sweep sweep_position_limits(std::uint64_t seed, int calls) {
+  using Ik = inhand::ContactIk<double, 3, N>;
+  using JV = typename Ik::JointVector;
+  using Jac = typename Ik::Jacobian;
+  auto rng = make_rng(seed);
+  Ik ik;
+  Sweep s;
+  const double dt = 1e-3, margin = 0.01;
+  for (int c = 0; c < calls; ++c) {
+    const Jac J = Jac::Random() * 0.08;
+    const Eigen::Vector3d x = Eigen::Vector3d::Random() * uniform(rng, 0.001, 0.2);
+    JV lower, upper, q, vmax;
+    for (int i = 0; i < N; ++i) {
+      lower(i) = uniform(rng, -1.0, 0.0);
+      upper(i) = lower(i) + uniform(rng, 0.05, 2.0);
+      const double u = uniform(rng, 0.0, 1.0);
+      // 30 % at the bound less the margin, 20 % just inside, 10 % beyond, the rest anywhere.
+      const bool up = uniform(rng, 0.0, 1.0) < 0.5;
+      const double edge = up ? upper(i) - margin : lower(i) + margin;
+      const double in = up ? -1.0 : 1.0;
+      if (u < 0.3)
+        q(i) = edge;
+      else if (u < 0.5)
+        q(i) = edge + in * uniform(rng, 0.0, 2e-3);
+      else if (u < 0.6)
+        q(i) = edge - in * uniform(rng, 0.0, 0.05);
+      else
+        q(i) = uniform(rng, lower(i), upper(i));
+      vmax(i) = c % 4 == 0 ? uniform(rng, 0.5, 5.0) : 1e6;  // a quarter velocity-limited
+    }
+    JV lo, hi, qd, free_qd, unscaled;
+    inhand::joint_position_box(q, lower, upper, margin, dt, lo, hi);
+    const auto rep = ik.solve(J, x, vmax, lo, hi, qd);
+    ik.solve(J, x, vmax, free_qd);
+    ik.solve(J, x, JV::Constant(1e300), unscaled);  // before the velocity scaling
+    ++s.calls;
+    EXPECT_FALSE(inhand::has(rep.status, IkStatus::invalid_input));
+    for (int i = 0; i < N; ++i) {
+      const double next = q(i) + qd(i) * dt;
+      const double top = std::max(upper(i) - margin, q(i)),
+                   bottom = std::min(lower(i) + margin, q(i));
+      if (next > top + 1e-12 || next < bottom - 1e-12) {
+        ADD_FAILURE() << "call " << c << " joint " << i << " crosses: q " << q(i) << " -> " << next
+                      << " in [" << bottom << ", " << top << "]";
+        return s;
+      }
+      if (std::abs(qd(i)) > vmax(i)) {
+        ADD_FAILURE() << "call " << c << " joint " << i << " beyond its velocity limit";
+        return s;
+      }
+    }
+    const bool inside =
+        ((unscaled.array() >= lo.array()) && (unscaled.array() <= hi.array())).all();
+    if (inside) {
+      if (!(qd == free_qd) || inhand::has(rep.status, IkStatus::position_limited)) {
+        ADD_FAILURE() << "call " << c << ": the unconstrained solution was feasible";
+        return s;
+      }
+      ++s.equal_unconstrained;
+    } else {
+      ++s.limited;
+      // Flagged exactly when a joint is held (a solution that left the box by rounding
+      // only may come back inside with none held).
+      EXPECT_EQ(inhand::has(rep.status, IkStatus::position_limited), rep.held_joints != 0u)
+          << "call " << c;
+      EXPECT_NEAR(rep.task_error, (J * qd - x).norm(), 1e-15) << "call " << c;
+      // Without velocity scaling the task error is the least the box allows.
+      if (rep.limit_scale == 1.0 && c % 10 == 1) {
+        const double l2 = rep.damping * rep.damping;
+        const double best = brute_force_minimum(J, x, l2, lo, hi);
+        const double ours = objective(J, x, l2, qd.template cast<double>());
+        EXPECT_LE(ours, best + 1e-12 * (1.0 + x.squaredNorm())) << "call " << c;
+        ++s.brute_checked;
+      }
+    }
+  }
+  return s;
+}
+
+TEST(ContactIkPositionLimits, SweepNeverCrossesAndKeepsFeasibleSolutions) {
+  const int per_shape = scaled(35000);  // three shapes: > 10^5 calls at the default scale
+  Sweep total;
+  for (const Sweep& s :
+       {sweep_position_limits<3>(21, per_shape), sweep_position_limits<4>(22, per_shape),
+        sweep_position_limits<5>(23, per_shape)}) {
+    total.calls += s.calls;
+    total.limited += s.limited;
+    total.equal_unconstrained += s.equal_unconstrained;
+    total.brute_checked += s.brute_checked;
+  }
+  EXPECT_EQ(total.calls, 3 * per_shape);
+  // Both regimes occur often enough to mean something.
+  EXPECT_GT(total.limited, total.calls / 10);
+  EXPECT_GT(total.equal_unconstrained, total.calls / 10);
+  EXPECT_GT(total.brute_checked, 100);
+  inhand_test::record("position_limit_sweep_calls", total.calls);
+  inhand_test::record("position_limit_sweep_limited", total.limited);
+}
+
+TEST(ContactIkPositionLimits, InvalidBoxIsRejected) {
+  inhand::ContactIk<double, 3, 3> ik;
+  const Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d x(0.1, 0, 0), vmax = Eigen::Vector3d::Constant(10);
+  Eigen::Vector3d qd, lo = Eigen::Vector3d::Constant(-1), hi = Eigen::Vector3d::Constant(1);
+  lo(1) = 0.5;  // lo > 0: z = 0 would not be feasible
+  EXPECT_TRUE(inhand::has(ik.solve(J, x, vmax, lo, hi, qd).status, IkStatus::invalid_input));
+  EXPECT_EQ(qd, Eigen::Vector3d::Zero());
+  lo(1) = -1;
+  hi(2) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(inhand::has(ik.solve(J, x, vmax, lo, hi, qd).status, IkStatus::invalid_input));
+}
+
+// ---- FingerServo: coupling and the closed loop at a limit ---------------------------
+
+using Chain4 = inhand::FingerChain<double, 3, 4>;
+using Servo4 = inhand::FingerServo<double, 3, 4>;
+
+/// The Shadow-like finger (abduction, three flexions) with the distal joint following
+/// the middle one with `ratio`.
+Chain4 coupled_finger(double ratio) {
+  const auto spec = inhand_test::finger_spec<double, 3>(4);
+  Chain4 c;
+  c.base = spec.base;
+  for (int i = 0; i < 4; ++i) c.joints[i] = spec.joints[static_cast<std::size_t>(i)];
+  c.joint_to_tip = spec.joint_to_tip;
+  c.fingertip_radius = spec.fingertip_radius;
+  c.joints[3].coupling.leader = 2;
+  c.joints[3].coupling.ratio = ratio;
+  return c;
+}
+
+struct FingerOut {
+  inhand::ServoCommand<double, 3> servo{};
+  inhand::ServoStatus servo_status{};
+  inhand::IkReport<double> ik{};
+  Eigen::Vector4d joint_velocities = Eigen::Vector4d::Zero();
+};
+
+TEST(CoupledJoints, CommandsKeepTheRatioAndMeetTheTask) {
+  for (double ratio : {1.0, 0.7, -0.5}) {
+    Chain4 chain = coupled_finger(ratio);
+    ASSERT_TRUE(chain.validate().ok());
+    EXPECT_EQ(chain.actuated_dof(), 3);
+    inhand::ServoGains<double> gains;
+    inhand::IkParams<double> ikp;
+    ikp.joint_limits = false;
+    auto rng = make_rng(31);
+    for (int k = 0; k < scaled(200); ++k) {
+      Servo4 servo;
+      servo.configure(chain, gains, ikp);
+      Eigen::Vector4d q;
+      for (int i = 0; i < 4; ++i)
+        q(i) = uniform(rng, chain.joints[i].lower * 0.5, chain.joints[i].upper * 0.5);
+      q(3) = ratio * q(2);
+      inhand::FingerKinematics<Chain4> ws(chain);
+      inhand::forward_kinematics(chain, q, ws);
+      Eigen::Matrix<double, 3, 4> J;
+      inhand::point_jacobian(ws, ws.fingertip.position, J);
+      const Eigen::Vector3d v = Eigen::Vector3d::Random() * 0.01;
+      FingerOut fo;
+      servo.command(J, q, v, Eigen::Vector3d::UnitY(), nullptr,
+                    std::numeric_limits<double>::infinity(), 1e-3, fo);
+      EXPECT_DOUBLE_EQ(fo.joint_velocities(3), ratio * fo.joint_velocities(2)) << "ratio " << ratio;
+      if (fo.ik.status == IkStatus::ok) {
+        // The whole-joint Jacobian applied to the coupled command gives the servo's
+        // velocity: the followers' motion is accounted for.
+        EXPECT_LT((J * fo.joint_velocities - fo.servo.total).norm(), 1e-12 * (1 + v.norm()))
+            << "ratio " << ratio << " case " << k;
+      }
+    }
+  }
+}
+
+TEST(CoupledJoints, ClosedLoopStopsAtTheLimitLessTheMargin) {
+  Chain4 chain = coupled_finger(1.0);
+  chain.joints[2].upper = 0.9;  // the leader's limit
+  chain.joints[3].upper = 0.6;  // the follower's tighter limit binds the pair
+  inhand::ServoGains<double> gains;
+  inhand::IkParams<double> ikp;
+  ikp.joint_limit_margin = 0.02;
+  Servo4 servo;
+  servo.configure(chain, gains, ikp);
+  Eigen::Vector4d q(0.0, 0.3, 0.3, 0.3);
+  inhand::FingerKinematics<Chain4> ws(chain);
+  bool flagged = false;
+  const double dt = 1e-3;
+  for (int k = 0; k < 3000; ++k) {
+    inhand::forward_kinematics(chain, q, ws);
+    Eigen::Matrix<double, 3, 4> J;
+    inhand::point_jacobian(ws, ws.fingertip.position, J);
+    // Ask for the fingertip motion of the coupled pair flexing at about 1 rad/s: drives
+    // both towards their limits.
+    const Eigen::Vector3d v = J.col(2) + J.col(3);
+    FingerOut fo;
+    const auto w = servo.command(J, q, v, Eigen::Vector3d::UnitY(), nullptr, 200.0, dt, fo);
+    flagged = flagged || inhand::has(w, inhand::ControllerWarning::joint_position_limited);
+    q += fo.joint_velocities * dt;
+    ASSERT_LE(q(3), 0.6 - 0.02 + 1e-12) << "tick " << k;
+    ASSERT_LE(q(2), 0.9 - 0.02 + 1e-12) << "tick " << k;
+    ASSERT_DOUBLE_EQ(q(3), q(2)) << "tick " << k;
+  }
+  EXPECT_TRUE(flagged);
+  EXPECT_GT(q(3), 0.6 - 0.02 - 1e-3);  // it did reach the limit
+}
+
+TEST(CoupledJoints, ValidationNamesTheField) {
+  Chain4 chain = coupled_finger(1.0);
+  chain.joints[3].coupling.leader = 3;
+  auto v = chain.validate(true);
+  EXPECT_STREQ(v.field, "fingers.chain.joints.coupling.leader");
+  EXPECT_EQ(v.index, 3);
+  chain.joints[3].coupling.leader = 2;
+  chain.joints[2].coupling.leader = 1;  // a leader that itself follows
+  v = chain.validate();
+  EXPECT_STREQ(v.field, "joints.coupling.leader");
+  chain.joints[2].coupling.leader = -1;
+  chain.joints[3].coupling.ratio = 0.0;
+  EXPECT_STREQ(chain.validate().field, "joints.coupling.ratio");
+  chain.joints[3].coupling.ratio = 1.0;
+  chain.joints[3].coupling.offset = std::numeric_limits<double>::infinity();
+  EXPECT_STREQ(chain.validate().field, "joints.coupling.offset");
+  inhand::IkParams<double> ikp;
+  ikp.joint_limit_margin = -0.1;
+  EXPECT_STREQ(ikp.validate().field, "ik.joint_limit_margin");
+}
+
+}  // namespace
