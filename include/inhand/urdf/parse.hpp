@@ -58,7 +58,7 @@ inline ::urdf::ModelInterfaceSharedPtr parse_model(const std::string& xml, std::
   }
   console_bridge::useOutputHandler(previous);
   if (!model) {
-    error = "urdfdom rejected the URDF: " +
+    error = "urdfdom rejected the document (XML or URDF): " +
             (collector.messages().empty() ? std::string("no message") : collector.messages());
   }
   return model;

@@ -182,7 +182,8 @@ inline bool read_finger(const ::urdf::ModelInterface& model, const FingerSpec& s
   double radius = 0;
   Vector<double, 3> centre;
   if (!fingertip_sphere(*model.getLink(spec.tip_link), spec, radius, centre)) {
-    error = "tip link '" + spec.tip_link + "': fingertip sphere radius or centre not finite";
+    error = "tip link '" + spec.tip_link +
+            "': the fingertip sphere needs a finite radius >= 0 and a finite centre";
     return false;
   }
   Pose<double, 3> to_centre{};
