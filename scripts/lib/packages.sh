@@ -1,10 +1,11 @@
 # Shared by scripts/test and scripts/demo (sourced, not run): the Debian packages the
 # project needs, and ensure_packages, which installs the missing ones.
 #
-# Keep this the ONE list of system dependencies. Eigen is the library's only
-# dependency; the rest serve the tests (GoogleTest, Orocos KDL as a reference),
-# benchmarks, examples (Box2D, MuJoCo, JSON, CLI11), plots (gnuplot), the robustness stages
-# (valgrind, clang with libFuzzer) and the build itself.
+# Keep this the ONE list of system dependencies. Eigen is the core library's only
+# dependency, urdfdom that of the optional URDF reader; the rest serve the tests
+# (GoogleTest, Orocos KDL and kdl_parser as references), benchmarks, examples (Box2D,
+# MuJoCo, JSON, CLI11), plots (gnuplot), the robustness stages (valgrind, clang with
+# libFuzzer) and the build itself.
 
 INHAND_PACKAGES=(
   # build tools
@@ -30,6 +31,9 @@ INHAND_PACKAGES=(
   libqhull-dev
   libgl-dev
   libopengl-dev
+  # the URDF reader (inhand::urdf) and its tests (tests/urdf: KDL reading the same files)
+  liburdfdom-dev
+  libkdl-parser-dev
   # robustness stages of scripts/test and scripts/fuzz: memcheck, clang + libFuzzer
   valgrind
   clang-14

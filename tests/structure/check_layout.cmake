@@ -1,8 +1,10 @@
 # The library's layout rules, checked on the headers as they are (cmake -P):
-#   1. The include graph points one way: math <- kinematics <- controller <- sim.
+#   1. The include graph points one way: math <- kinematics <- controller <- sim, and
+#      controller <- urdf (the URDF reader, beside sim).
 #      A header under include/inhand/<layer>/ includes inhand headers of its own layer
-#      or of a layer below it only; the core's top-level headers (inhand.hpp,
-#      version.hpp) include nothing from sim.
+#      or of a layer below it only; a top-level header named after a layer (urdf.hpp)
+#      belongs to that layer; the core's other top-level headers (inhand.hpp,
+#      version.hpp) include nothing from sim or urdf.
 #   2. No header is longer than MAX_LINES lines.
 # Arguments: -DINCLUDE_DIR=<repo>/include -DMAX_LINES=<n>
 cmake_minimum_required(VERSION 3.16)
@@ -11,6 +13,7 @@ set(rank_math 0)
 set(rank_kinematics 1)
 set(rank_controller 2)
 set(rank_sim 3)
+set(rank_urdf 3)
 set(failures "")
 
 file(GLOB_RECURSE headers RELATIVE "${INCLUDE_DIR}" "${INCLUDE_DIR}/inhand/*.hpp")
@@ -24,6 +27,8 @@ foreach(h IN LISTS headers)
   if(n GREATER MAX_LINES)
     string(APPEND failures "${h}: ${n} lines (at most ${MAX_LINES})\n")
   endif()
+  set(layer "core top level")
+  set(own ${rank_controller})
   if(h MATCHES "^inhand/([a-z_]+)/")
     set(layer "${CMAKE_MATCH_1}")
     if(NOT DEFINED rank_${layer})
@@ -31,13 +36,22 @@ foreach(h IN LISTS headers)
       continue()
     endif()
     set(own ${rank_${layer}})
-  else()
-    set(layer "core top level")
-    set(own ${rank_controller})
+  elseif(h MATCHES "^inhand/([a-z_]+)\\.hpp$")
+    if(DEFINED rank_${CMAKE_MATCH_1})
+      set(layer "${CMAKE_MATCH_1}")
+      set(own ${rank_${layer}})
+    endif()
   endif()
   foreach(line IN LISTS lines)
+    set(target "")
     if(line MATCHES "^[ \t]*#[ \t]*include[ \t]*\"inhand/([a-z_]+)/")
       set(target "${CMAKE_MATCH_1}")
+    elseif(line MATCHES "^[ \t]*#[ \t]*include[ \t]*\"inhand/([a-z_]+)\\.hpp\"")
+      if(DEFINED rank_${CMAKE_MATCH_1})
+        set(target "${CMAKE_MATCH_1}")  # a layer's own top-level header (urdf.hpp)
+      endif()
+    endif()
+    if(target)
       if(NOT DEFINED rank_${target})
         string(APPEND failures "${h}: includes from unknown folder ${target}\n")
       elseif(rank_${target} GREATER own)

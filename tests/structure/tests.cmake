@@ -1,5 +1,5 @@
 # structure.layout: the include graph points one way (math <- kinematics <- controller
-# <- sim) and no public header exceeds 300 lines (check_layout.cmake).
+# <- sim, urdf) and no public header exceeds 300 lines (check_layout.cmake).
 add_test(NAME structure.layout
   COMMAND ${CMAKE_COMMAND} -DINCLUDE_DIR=${PROJECT_SOURCE_DIR}/include -DMAX_LINES=300
           -P ${CMAKE_CURRENT_LIST_DIR}/check_layout.cmake)

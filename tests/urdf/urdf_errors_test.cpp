@@ -1,0 +1,152 @@
+// Malformed and unsupported URDF documents: each is refused with an error that names
+// the offending element (link or joint), and none crashes or throws.
+// Every case reads one finger {"f", <root, mostly "palm">, <tip>} from a small document
+// built around the case's joint; the refusals are printed ("[ refused  ]").
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "inhand/urdf.hpp"
+
+namespace {
+
+using inhand::urdf::FingerSpec;
+
+// A revolute joint `name` from `parent` to `child` with the given inner XML.
+std::string joint(const std::string& name, const std::string& type, const std::string& parent,
+                  const std::string& child, const std::string& inner) {
+  return "<joint name='" + name + "' type='" + type + "'><parent link='" + parent +
+         "'/><child link='" + child + "'/>" + inner + "</joint>";
+}
+const std::string kLimit = "<limit lower='-1' upper='1' effort='1' velocity='1'/>";
+const std::string kAxis = "<axis xyz='1 0 0'/>";
+
+// palm -> l1 (j1, revolute) -> l2 (`type` joint `name` with `inner`) -> tip (fixed).
+std::string hand(const std::string& name, const std::string& type, const std::string& inner,
+                 const std::string& extra = "") {
+  return "<robot name='r'><link name='palm'/><link name='l1'/><link name='l2'/>"
+         "<link name='tip'/>" +
+         joint("j1", "revolute", "palm", "l1", kAxis + kLimit) +
+         joint(name, type, "l1", "l2", inner) + joint("jtip", "fixed", "l2", "tip", "") + extra +
+         "</robot>";
+}
+
+struct BadCase {
+  const char* what;
+  std::string xml;
+  std::string tip;
+  const char* must_name;  // appears in the error text
+  std::string root = "palm";
+};
+
+std::vector<BadCase> bad_cases() {
+  const std::string ok_inner = kAxis + kLimit;
+  return {
+      {"prismatic joint", hand("slider", "prismatic", ok_inner), "tip", "slider"},
+      {"floating joint", hand("loose", "floating", ""), "tip", "loose"},
+      {"planar joint", hand("flat", "planar", "<axis xyz='0 0 1'/>"), "tip", "flat"},
+      {"missing tip link", hand("j2", "revolute", ok_inner), "no_such_tip", "no_such_tip"},
+      {"tip not below root",
+       hand("j2", "revolute", ok_inner,
+            "<link name='other'/>" + joint("jo", "fixed", "palm", "other", "")),
+       "other", "other", "l2"},
+      {"missing root link", hand("j2", "revolute", ok_inner), "tip", "nohand", "nohand"},
+      {"mimic of a joint outside the finger",
+       hand("j2", "revolute", ok_inner + "<mimic joint='elsewhere'/>",
+            "<link name='x'/>" + joint("elsewhere", "revolute", "palm", "x", ok_inner)),
+       "tip", "elsewhere"},
+      {"mimic of a joint that is not in the document",
+       hand("j2", "revolute", ok_inner + "<mimic joint='ghost'/>"), "tip", "ghost"},
+      {"zero axis", hand("still", "revolute", "<axis xyz='0 0 0'/>" + kLimit), "tip", "still"},
+      {"non-finite origin", hand("j2", "revolute", "<origin xyz='nan 0 0'/>" + ok_inner), "tip",
+       "j2"},
+      {"infinite rotation", hand("j2", "revolute", "<origin rpy='0 inf 0'/>" + ok_inner), "tip",
+       "j2"},
+      {"lower > upper",
+       hand("backwards", "revolute",
+            kAxis + "<limit lower='1' upper='-1' effort='1' velocity='1'/>"),
+       "tip", "backwards"},
+      {"revolute joint without limits", hand("nolimit", "revolute", kAxis), "tip", "nolimit"},
+      {"malformed XML", "<robot name='r'><link name='palm'/><link name='tip'", "tip", "XML"},
+      {"no movable joint",
+       "<robot name='r'><link name='palm'/><link name='tip'/>" +
+           joint("weld", "fixed", "palm", "tip", "") + "</robot>",
+       "tip", "tip"},
+      {"tip is the root", hand("j2", "revolute", ok_inner), "palm", "palm"},
+      {"joint naming a missing child link",
+       "<robot name='r'><link name='palm'/><link name='tip'/>" +
+           joint("lost", "revolute", "palm", "nowhere", ok_inner) + "</robot>",
+       "tip", "nowhere"},
+      {"mimic of itself", hand("selfish", "revolute", ok_inner + "<mimic joint='selfish'/>"), "tip",
+       "selfish"},
+      {"negative fingertip sphere",
+       "<robot name='r'><link name='palm'/><link name='tip'><collision><geometry>"
+       "<sphere radius='-0.01'/></geometry></collision></link>" +
+           joint("j1", "revolute", "palm", "tip", ok_inner) + "</robot>",
+       "tip", "tip"},
+  };
+}
+
+TEST(UrdfErrors, EachBadDocumentIsRefusedNamingTheElement) {
+  int refused = 0;
+  for (const BadCase& c : bad_cases()) {
+    SCOPED_TRACE(c.what);
+    const std::vector<FingerSpec> specs = {{"f", c.root, c.tip}};
+    inhand::urdf::FingersResult<inhand::FingerChain<double, 3, inhand::Dynamic>> r;
+    EXPECT_NO_THROW(r = inhand::urdf::read_fingers_string(c.xml, specs));
+    EXPECT_FALSE(r.ok());
+    EXPECT_TRUE(r.fingers.empty());
+    EXPECT_NE(r.error.find(c.must_name), std::string::npos)
+        << "error does not name '" << c.must_name << "': " << r.error;
+    refused += r.ok() ? 0 : 1;
+    std::cout << "[ refused  ] " << c.what << ": " << r.error << "\n";
+  }
+  EXPECT_EQ(refused, static_cast<int>(bad_cases().size()));
+}
+
+// A tip link on another branch of the tree: the error names both links.
+TEST(UrdfErrors, TipNotBelowRootNamesBothLinks) {
+  const std::string xml = hand("j2", "revolute", kAxis + kLimit,
+                               "<link name='other'/>" + joint("jo", "fixed", "palm", "other", ""));
+  const auto r = inhand::urdf::read_fingers_string(xml, {{"f", "l2", "other"}});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error.find("'other'"), std::string::npos) << r.error;
+  EXPECT_NE(r.error.find("'l2'"), std::string::npos) << r.error;
+}
+
+// A missing file is an error naming the path, not an exception.
+TEST(UrdfErrors, MissingFileNamesThePath) {
+  const auto r = inhand::urdf::read_fingers_file("/nonexistent/hand.urdf", {{"f", "palm", "tip"}});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error.find("/nonexistent/hand.urdf"), std::string::npos) << r.error;
+}
+
+// The good document of the table reads, with the continuous-joint and default-velocity
+// conventions, a mimic coupling, and the spec's fingertip where the tip has no sphere.
+TEST(UrdfErrors, TheGoodDocumentReads) {
+  const std::string xml = hand(
+      "j2", "continuous", "<axis xyz='0 0 2'/><mimic joint='j1' multiplier='-0.5' offset='0.1'/>");
+  FingerSpec spec{"f", "palm", "tip"};
+  spec.fingertip_radius = 0.007;
+  spec.contact_offset = Eigen::Vector3d(0, 0, 0.003);
+  inhand::urdf::ReadOptions options;
+  options.default_velocity = 1.5;
+  const auto r = inhand::urdf::read_fingers_string(xml, {spec}, options);
+  ASSERT_TRUE(r.ok()) << r.error;
+  const auto& c = r.fingers[0];
+  ASSERT_EQ(c.dof(), 2);
+  EXPECT_EQ(c.joints[1].axis, Eigen::Vector3d::UnitZ());
+  EXPECT_EQ(c.joints[1].lower, -options.continuous_limit);
+  EXPECT_EQ(c.joints[1].upper, options.continuous_limit);
+  EXPECT_EQ(c.joints[1].max_velocity, 1.5);
+  EXPECT_EQ(c.joints[0].max_velocity, 1.0);
+  EXPECT_EQ(c.joints[1].coupling.leader, 0);
+  EXPECT_EQ(c.joints[1].coupling.ratio, -0.5);
+  EXPECT_EQ(c.joints[1].coupling.offset, 0.1);
+  EXPECT_EQ(c.fingertip_radius, 0.007);
+  EXPECT_EQ(c.joint_to_tip.position, Eigen::Vector3d(0, 0, 0.003));
+  EXPECT_EQ(r.joint_names[0], (std::vector<std::string>{"j1", "j2"}));
+}
+
+}  // namespace
