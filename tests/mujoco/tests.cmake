@@ -7,8 +7,15 @@
 #   mujoco_cylinder    the paper's cylinder translation in closed loop on the MJCF hand
 #                      (the case with the paper's bounds is disabled: the grasp does not
 #                      complete on MuJoCo yet; the file gives the figures)
+#   mujoco_urdf        MuJoCo's URDF import of models/urdf/*.urdf against inhand::urdf
+#                      reading the same files (fingertip positions, random configurations);
+#                      only where inhand::urdf exists (urdfdom found)
 if(mujoco_FOUND AND GTest_FOUND)
-  foreach(name IN ITEMS mujoco_chains mujoco_cylinder)
+  set(names mujoco_chains mujoco_cylinder)
+  if(TARGET inhand::urdf)
+    list(APPEND names mujoco_urdf)
+  endif()
+  foreach(name IN LISTS names)
     add_executable(${name} ${CMAKE_CURRENT_LIST_DIR}/${name}.cpp)
     target_include_directories(${name} PRIVATE
       ${CMAKE_CURRENT_SOURCE_DIR} ${PROJECT_SOURCE_DIR}/examples/mujoco)
@@ -19,4 +26,7 @@ if(mujoco_FOUND AND GTest_FOUND)
     gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_PREFIX mujoco.
                          PROPERTIES LABELS mujoco TIMEOUT 120)
   endforeach()
+  if(TARGET inhand::urdf)
+    target_link_libraries(mujoco_urdf PRIVATE inhand::urdf)
+  endif()
 endif()

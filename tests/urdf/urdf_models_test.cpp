@@ -1,12 +1,7 @@
 // The shipped hand models (models/urdf/*.urdf) read by inhand::urdf, checked against
 // KDL reading the same files through kdl_parser, and against the in-code presets.
 //
-// Finger specs (name, root link, tip link), as documented in each file:
-//   three_finger_hand.urdf  left/right/thumb: palm -> <name>_distal (sphere 40 mm down
-//                           the distal link)
-//   shadow_like_hand.urdf   first/middle/ring/thumb: palm -> fftip/mftip/rftip/thtip
-//   allegro_like_hand.urdf  index/middle/ring/thumb: palm -> link_3.0_tip/link_7.0_tip/
-//                           link_11.0_tip/link_15.0_tip
+// Finger specs (name, root link, tip link): tests/common/urdf_hand_models.hpp.
 // KDL's chain (tree.getChain(root, tip)) ends at the tip link frame; inhand's fingertip
 // frame is that frame moved to the fingertip sphere centre (`sphere` below, in the tip
 // link frame). KDL treats mimic joints as independent joints, so the comparison is over
@@ -21,46 +16,18 @@
 #include <vector>
 
 #include "common/test_support.hpp"
+#include "common/urdf_hand_models.hpp"
 #include "inhand/sim/presets.hpp"
 #include "inhand/urdf.hpp"
 
 namespace {
 
-using inhand::urdf::FingerSpec;
 using Chain = inhand::FingerChain<double, 3, inhand::Dynamic>;
 
-struct HandModel {
-  std::string file;
-  std::vector<FingerSpec> specs;
-  std::vector<Eigen::Vector3d> sphere;  // fingertip sphere centre in the tip link frame
-};
+using HandModel = inhand_test::UrdfHandModel;
+using inhand_test::urdf_model_path;
 
-std::string model_path(const std::string& file) {
-  return std::string(INHAND_MODELS_DIR) + "/urdf/" + file;
-}
-
-std::vector<HandModel> hand_models() {
-  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  return {
-      {"three_finger_hand.urdf",
-       {{"left", "palm", "left_distal"},
-        {"right", "palm", "right_distal"},
-        {"thumb", "palm", "thumb_distal"}},
-       {Eigen::Vector3d(0, 0, -0.04), Eigen::Vector3d(0, 0, -0.04), Eigen::Vector3d(0, 0, -0.04)}},
-      {"shadow_like_hand.urdf",
-       {{"first", "palm", "fftip"},
-        {"middle", "palm", "mftip"},
-        {"ring", "palm", "rftip"},
-        {"thumb", "palm", "thtip"}},
-       {zero, zero, zero, zero}},
-      {"allegro_like_hand.urdf",
-       {{"index", "palm", "link_3.0_tip"},
-        {"middle", "palm", "link_7.0_tip"},
-        {"ring", "palm", "link_11.0_tip"},
-        {"thumb", "palm", "link_15.0_tip"}},
-       {zero, zero, zero, zero}},
-  };
-}
+std::vector<HandModel> hand_models() { return inhand_test::urdf_hand_models(); }
 
 Eigen::Vector3d from_kdl(const KDL::Vector& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()); }
 Eigen::Matrix3d from_kdl(const KDL::Rotation& R) {
@@ -80,10 +47,10 @@ TEST(UrdfModels, AgreeWithKdlParser) {
   double worst_fk = 0, worst_jac = 0;
   for (const HandModel& model : hand_models()) {
     SCOPED_TRACE(model.file);
-    const auto hand = inhand::urdf::read_fingers_file(model_path(model.file), model.specs);
+    const auto hand = inhand::urdf::read_fingers_file(urdf_model_path(model.file), model.specs);
     ASSERT_TRUE(hand.ok()) << hand.error;
     KDL::Tree tree;
-    ASSERT_TRUE(kdl_parser::treeFromFile(model_path(model.file), tree));
+    ASSERT_TRUE(kdl_parser::treeFromFile(urdf_model_path(model.file), tree));
     for (std::size_t f = 0; f < model.specs.size(); ++f) {
       SCOPED_TRACE(model.specs[f].name);
       const Chain& chain = hand.fingers[f];
@@ -139,7 +106,7 @@ TEST(UrdfModels, MatchTheInCodePresets) {
     const HandModel& model = models[static_cast<std::size_t>(m)];
     const inhand::plant::HandPreset& preset = presets[m];
     SCOPED_TRACE(model.file);
-    const auto hand = inhand::urdf::read_fingers_file(model_path(model.file), model.specs);
+    const auto hand = inhand::urdf::read_fingers_file(urdf_model_path(model.file), model.specs);
     ASSERT_TRUE(hand.ok()) << hand.error;
     ASSERT_EQ(hand.fingers.size(), preset.fingers.size());
     for (std::size_t f = 0; f < preset.fingers.size(); ++f) {
@@ -192,7 +159,7 @@ TEST(UrdfModels, MatchTheInCodePresets) {
 // coupling.
 TEST(UrdfModels, ShadowDistalJointsAreCoupledToTheMiddleJoints) {
   const HandModel model = hand_models()[1];
-  const auto hand = inhand::urdf::read_fingers_file(model_path(model.file), model.specs);
+  const auto hand = inhand::urdf::read_fingers_file(urdf_model_path(model.file), model.specs);
   ASSERT_TRUE(hand.ok()) << hand.error;
   const char* prefixes[3] = {"FF", "MF", "RF"};
   for (int f = 0; f < 3; ++f) {
@@ -209,8 +176,8 @@ TEST(UrdfModels, ShadowDistalJointsAreCoupledToTheMiddleJoints) {
   }
   const Chain& thumb = hand.fingers[3];
   EXPECT_EQ(thumb.actuated_dof(), 5);
-  const auto three =
-      inhand::urdf::read_fingers_file(model_path(hand_models()[0].file), hand_models()[0].specs);
+  const auto three = inhand::urdf::read_fingers_file(urdf_model_path(hand_models()[0].file),
+                                                     hand_models()[0].specs);
   ASSERT_TRUE(three.ok()) << three.error;
   for (const Chain& c : three.fingers) EXPECT_EQ(c.actuated_dof(), c.dof());
 }
@@ -222,7 +189,8 @@ TEST(UrdfModels, AllegroLikeHandHasThePublishedJoints) {
   const HandModel model = hand_models()[2];
   inhand::urdf::ReadOptions options;
   options.default_velocity = 2.5;
-  const auto hand = inhand::urdf::read_fingers_file(model_path(model.file), model.specs, options);
+  const auto hand =
+      inhand::urdf::read_fingers_file(urdf_model_path(model.file), model.specs, options);
   ASSERT_TRUE(hand.ok()) << hand.error;
   for (const Chain& c : hand.fingers) {
     ASSERT_EQ(c.dof(), 4);
@@ -237,12 +205,13 @@ TEST(UrdfModels, AllegroLikeHandHasThePublishedJoints) {
             (std::vector<std::string>{"joint_12.0", "joint_13.0", "joint_14.0", "joint_15.0"}));
   // The same hand into a fixed-capacity chain in float.
   using Bounded = inhand::FingerChain<float, 3, inhand::Dynamic, 5>;
-  const auto small = inhand::urdf::read_fingers_file<Bounded>(model_path(model.file), model.specs);
+  const auto small =
+      inhand::urdf::read_fingers_file<Bounded>(urdf_model_path(model.file), model.specs);
   ASSERT_TRUE(small.ok()) << small.error;
   EXPECT_EQ(small.fingers[2].dof(), 4);
   const auto too_small =
       inhand::urdf::read_fingers_file<inhand::FingerChain<double, 3, inhand::Dynamic, 3>>(
-          model_path(model.file), model.specs);
+          urdf_model_path(model.file), model.specs);
   ASSERT_FALSE(too_small.ok());
   EXPECT_NE(too_small.error.find("link_3.0_tip"), std::string::npos) << too_small.error;
 }
@@ -254,7 +223,7 @@ TEST(UrdfModels, AllegroLikeHandHasThePublishedJoints) {
 // or -Y (thumb), |x| <= 45 mm. (The placement search found >= 171 such samples for each finger.)
 TEST(UrdfModels, AllegroLikeHandReachesTheCylinder) {
   const HandModel model = hand_models()[2];
-  const auto hand = inhand::urdf::read_fingers_file(model_path(model.file), model.specs);
+  const auto hand = inhand::urdf::read_fingers_file(urdf_model_path(model.file), model.specs);
   ASSERT_TRUE(hand.ok()) << hand.error;
   auto rng = inhand_test::make_rng(703);
   const double reach = 0.020 + 0.012;
