@@ -10,6 +10,7 @@
 #include <cstdio>
 
 #include "inhand/controller/ik.hpp"
+#include "inhand/sim/presets_allegro.hpp"
 
 namespace {
 
@@ -194,6 +195,35 @@ TEST(Presets, ThreeFingerHandIsValidAndConsistent) {
           .ok());
 }
 
+TEST(Presets, AllegroLikeHandIsValidAndConsistent) {
+  const HandPreset hand = inhand::plant::allegro_like_hand();
+  ASSERT_EQ(hand.fingers.size(), 4u);
+  EXPECT_EQ(hand.thumb, 3);
+  for (const auto& f : hand.fingers) {
+    EXPECT_EQ(f.dof(), 4);
+    EXPECT_EQ(f.fingertip_radius, 0.012);
+    EXPECT_TRUE(f.validate().ok());
+  }
+  for (const auto& [t, f] : hand.opposing_pairs)
+    EXPECT_NEAR(hand.approach_directions[t].dot(hand.approach_directions[f]), -1.0, 1e-12);
+  EXPECT_EQ(hand.opposing_pairs.size(), 3u);
+  for (const auto& obj :
+       {inhand::plant::paper_cylinder(hand), inhand::plant::paper_slender_box(hand)})
+    EXPECT_TRUE(
+        inhand::plant::HandPlant::validate(hand.fingers, obj, inhand::plant::default_plant_params())
+            .ok());
+}
+
+// The hands added after the first two, both objects in one test each.
+class LaterPresets : public ::testing::TestWithParam<HandPreset (*)()> {};
+TEST_P(LaterPresets, ReachBothObjectsUnderOffsets) {
+  const HandPreset hand = GetParam()();
+  check_preset(hand, inhand::plant::paper_cylinder(hand), "cylinder");
+  check_preset(hand, inhand::plant::paper_slender_box(hand), "box");
+}
+INSTANTIATE_TEST_SUITE_P(Presets, LaterPresets,
+                         ::testing::Values(&inhand::plant::allegro_like_hand));
+
 TEST(Presets, ShadowLikeHandReachesCylinderUnderOffsets) {
   const HandPreset hand = inhand::plant::shadow_like_hand();
   check_preset(hand, inhand::plant::paper_cylinder(hand), "cylinder");
@@ -213,7 +243,8 @@ TEST(Presets, ThreeFingerHandReachesBoxUnderOffsets) {
 
 TEST(Presets, OpenConfigurationsClearTheObjects) {
   for (const HandPreset& hand :
-       {inhand::plant::shadow_like_hand(), inhand::plant::three_finger_hand()}) {
+       {inhand::plant::shadow_like_hand(), inhand::plant::three_finger_hand(),
+        inhand::plant::allegro_like_hand()}) {
     check_open_configuration(hand, inhand::plant::paper_cylinder(hand));
     check_open_configuration(hand, inhand::plant::paper_slender_box(hand));
   }
