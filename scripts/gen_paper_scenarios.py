@@ -6,7 +6,11 @@
   stage 1 "hold":       release, keep the pose for 2 s
   stage 2 "manipulate": 5 mm along the axis and back (translate), or 0 -> -0.2 rad
                         -> 0 about it (rotate), in 4 s; then 1 s of settling
-with the bounds the reproduction must meet in "expect". The same experiments are
+with the bounds the reproduction must meet in "expect". The same 12 experiments on the
+other 4-finger hands go to scenarios/allegro/allegro_<name>.json ("allegro_like",
+plant::allegro_like_hand()) and scenarios/shadow_coupled/shadow_coupled_<name>.json
+("shadow_like_coupled", plant::shadow_like_coupled_hand(): distal joints J1 = J2), with
+the same bounds (scenario names are unique across scenarios/). The same experiments are
 built in C++ by inhand::plant::paper_scenario(); tests/scenarios checks that the files
 parse to exactly that. Re-run after changing this script; the JSON files are committed.
 
@@ -19,6 +23,10 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 OUT = ROOT / "scenarios" / "paper"
+# (directory, file/scenario name prefix, "hand" value)
+HANDS = [(OUT, "", "shadow_like"),
+         (ROOT / "scenarios" / "allegro", "allegro_", "allegro_like"),
+         (ROOT / "scenarios" / "shadow_coupled", "shadow_coupled_", "shadow_like_coupled")]
 
 OBJECTS = {
     # paper_cylinder(): radius 20 mm, length 100 mm, 50 g; axis along world X.
@@ -29,8 +37,8 @@ OBJECTS = {
 AXES = {"x": [1, 0, 0], "y": [0, 1, 0], "z": [0, 0, 1]}
 
 
-def scenario(obj, task, axis):
-    name = f"{obj}_{task}_{axis}"
+def scenario(obj, task, axis, prefix="", hand="shadow_like"):
+    name = f"{prefix}{obj}_{task}_{axis}"
     if task == "translate":
         segment = {"kind": "reciprocate", "motion": "move", "axis": AXES[axis],
                    "amount": 0.005, "duration": 4.0, "cycles": 1}
@@ -46,7 +54,7 @@ def scenario(obj, task, axis):
         "name": name,
         "description": f"Paper experiment: {'slender box' if obj == 'box' else 'cylinder'}, "
                        f"{what} (grasp 1 N frozen, release and hold 2 s, manipulate 4 s, settle 1 s)",
-        "hand": "shadow_like",
+        "hand": hand,
         "object": OBJECTS[obj],
         "stages": [
             {"name": "grasp", "kind": "grasp", "duration": 3.0},
@@ -72,23 +80,28 @@ def to_json(obj):
 
 def main():
     check = "--check" in sys.argv[1:]
-    OUT.mkdir(parents=True, exist_ok=True)
     differ = []
-    for obj in OBJECTS:
-        for task in ("translate", "rotate"):
-            for axis in AXES:
-                name, s = scenario(obj, task, axis)
-                path = OUT / f"{name}.json"
-                text = to_json(s)
-                if check:
-                    if not path.exists() or path.read_text() != text:
-                        differ.append(str(path))
-                else:
-                    path.write_text(text)
+    for out, prefix, hand in HANDS:
+        out.mkdir(parents=True, exist_ok=True)
+        for obj in OBJECTS:
+            for task in ("translate", "rotate"):
+                for axis in AXES:
+                    differ += write(out, scenario(obj, task, axis, prefix, hand), check)
     if differ:
         print("out of date (run scripts/gen_paper_scenarios.py):\n  " + "\n  ".join(differ))
         return 1
     return 0
+
+
+def write(out, named, check):
+    """Writes (or with check compares) one file; returns the paths that differ."""
+    name, s = named
+    path = out / f"{name}.json"
+    text = to_json(s)
+    if check:
+        return [] if path.exists() and path.read_text() == text else [str(path)]
+    path.write_text(text)
+    return []
 
 
 if __name__ == "__main__":

@@ -23,6 +23,8 @@
 #include "common/json_reader.hpp"
 #include "inhand/math/so3.hpp"
 #include "inhand/sim/presets.hpp"
+#include "inhand/sim/presets_allegro.hpp"
+#include "inhand/sim/presets_coupled.hpp"
 #include "inhand/sim/scenario.hpp"
 
 namespace inhand::examples {
@@ -44,7 +46,8 @@ struct ScenarioFile {
   plant::ScenarioSpec spec;
   Expectations expect;
   std::vector<FaultExpectation> fault_expect;  ///< one per spec.faults entry
-  std::string hand_preset;                     ///< "shadow_like" or "three_finger"
+  std::string
+      hand_preset;  ///< "shadow_like", "three_finger", "allegro_like", "shadow_like_coupled"
   std::string description;
 };
 
@@ -409,9 +412,17 @@ inline ScenarioFile parse_scenario(const Json& j) {
   if (s.name.empty() || s.name.size() > 200)
     throw JsonError("name", "must have 1 to 200 characters");
   out.description = r.string("description", "");
-  out.hand_preset = r.choice("hand", "shadow_like", {"shadow_like", "three_finger"});
-  s.hand =
-      out.hand_preset == "shadow_like" ? plant::shadow_like_hand() : plant::three_finger_hand();
+  out.hand_preset =
+      r.choice("hand", "shadow_like",
+               {"shadow_like", "three_finger", "allegro_like", "shadow_like_coupled"});
+  if (out.hand_preset == "three_finger")
+    s.hand = plant::three_finger_hand();
+  else if (out.hand_preset == "allegro_like")
+    s.hand = plant::allegro_like_hand();
+  else if (out.hand_preset == "shadow_like_coupled")
+    s.hand = plant::shadow_like_coupled_hand();
+  else
+    s.hand = plant::shadow_like_hand();
   if (!r.has("object")) throw JsonError("object", "required key is missing");
   s.object = scenario_detail::read_object(r.object("object"), s.hand);
   s.plant = scenario_detail::read_plant(r.object("plant"));

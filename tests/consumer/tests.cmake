@@ -121,7 +121,8 @@ if(INHAND_INSTALL)
 endif()
 
 # The examples are consumers too: each exits non-zero unless its own check passed
-# (finger_tracking: it converged; 01_..04_: see the file comment of each).
+# (finger_tracking: it converged; 01_..04_: see the file comment of each). The
+# URDF example 05_allegro_urdf registers its own test (examples/05_allegro_urdf).
 # (Examples are added after the tests, so the targets cannot be tested for here.)
 if(INHAND_BUILD_EXAMPLES)
   foreach(example finger_tracking 01_finger_servo 02_whole_hand 03_external_kinematics

@@ -128,6 +128,27 @@ TEST(ScenarioJson, OmittedFieldsTakeTheLibraryDefaults) {
   ASSERT_EQ(f.expect.stages.size(), 2u);
 }
 
+// Each "hand" value selects its preset (name, fingers, couplings).
+TEST(ScenarioJson, HandNamesSelectThePresets) {
+  const std::pair<const char*, ip::HandPreset> hands[] = {
+      {"shadow_like", ip::shadow_like_hand()},
+      {"three_finger", ip::three_finger_hand()},
+      {"allegro_like", ip::allegro_like_hand()},
+      {"shadow_like_coupled", ip::shadow_like_coupled_hand()}};
+  for (const auto& [value, preset] : hands) {
+    Json j = base_scenario();
+    j["hand"] = value;
+    const ex::ScenarioFile f = ex::parse_scenario(j);
+    EXPECT_EQ(f.hand_preset, value);
+    EXPECT_EQ(f.spec.hand.name, preset.name) << value;
+    ASSERT_EQ(f.spec.hand.fingers.size(), preset.fingers.size()) << value;
+    for (std::size_t i = 0; i < preset.fingers.size(); ++i)
+      EXPECT_EQ(f.spec.hand.fingers[i].actuated_dof(), preset.fingers[i].actuated_dof()) << value;
+  }
+  EXPECT_EQ(ip::shadow_like_coupled_hand().fingers[0].actuated_dof(), 3);
+  EXPECT_EQ(ip::allegro_like_hand().fingers[3].fingertip_radius, 0.012);
+}
+
 TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   Json j = base_scenario();
   j["hand"] = "three_finger";

@@ -10,6 +10,8 @@
 #include <cstdio>
 
 #include "inhand/controller/ik.hpp"
+#include "inhand/sim/presets_allegro.hpp"
+#include "inhand/sim/presets_coupled.hpp"
 
 namespace {
 
@@ -47,15 +49,33 @@ double link_clearance(const PlantFinger& chain, const PlantFinger::JointVector& 
   return best;
 }
 
-// Iterates q += J^+ (step towards the target) + null-space pull to the grasp posture.
+// Iterates q += J^+ (step towards the target) + null-space pull to the grasp posture,
+// over the actuated joints: a follower (JointCoupling) moves ratio x its leader, its
+// column folded into the leader's (C maps actuated to all joint velocities; C = I for
+// an uncoupled finger). sigma_min is that of J C.
 IkResult solve_tip_position(const PlantFinger& chain, const PlantFinger::JointVector& start,
                             const PlantFinger::JointVector& preferred,
                             const Eigen::Vector3d& target) {
-  const int n = chain.dof();
-  inhand::ContactIk<double, 3, inhand::Dynamic, 6> ik(n);
+  const int n = chain.dof(), na = chain.actuated_dof();
+  std::vector<int> column(static_cast<std::size_t>(n));  // joint -> actuated index
+  std::vector<int> actuated;
+  for (int j = 0; j < n; ++j)
+    if (!chain.joints[j].coupling.coupled()) {
+      column[static_cast<std::size_t>(j)] = static_cast<int>(actuated.size());
+      actuated.push_back(j);
+    }
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, na);
+  for (int j = 0; j < n; ++j) {
+    const auto& c = chain.joints[j].coupling;
+    if (c.coupled())
+      C(j, column[static_cast<std::size_t>(c.leader)]) = c.ratio;
+    else
+      C(j, column[static_cast<std::size_t>(j)]) = 1.0;
+  }
+  inhand::ContactIk<double, 3, inhand::Dynamic, 6> ik(na);
   inhand::FingerKinematics<PlantFinger> ws(chain);
-  PlantFinger::Jacobian J(3, n);
-  PlantFinger::JointVector dq(n), unlimited(n), pull(n);
+  PlantFinger::Jacobian J(3, n), Ja(3, na);
+  PlantFinger::JointVector dq(na), unlimited(na), pull(na);
   unlimited.setConstant(1e9);
   IkResult r;
   r.q = start;
@@ -65,16 +85,21 @@ IkResult solve_tip_position(const PlantFinger& chain, const PlantFinger::JointVe
     if (e.norm() < 1e-7) break;
     if (e.norm() > 1e-3) e *= 1e-3 / e.norm();  // small steps: at most 1 mm
     inhand::point_jacobian(ws, ws.fingertip.position, J);
-    pull = 0.05 * (preferred - r.q);
-    ik.solve(J, e, unlimited, pull, dq);
-    r.q = (r.q + dq).cwiseMax(chain.lower_limits()).cwiseMin(chain.upper_limits());
+    Ja = J * C;
+    for (int k = 0; k < na; ++k) {
+      const int j = actuated[static_cast<std::size_t>(k)];
+      pull(k) = 0.05 * (preferred(j) - r.q(j));
+    }
+    ik.solve(Ja, e, unlimited, pull, dq);
+    const PlantFinger::JointVector step = C * dq;
+    r.q = (r.q + step).cwiseMax(chain.lower_limits()).cwiseMin(chain.upper_limits());
   }
   inhand::forward_kinematics(chain, r.q, ws);
   r.error = (target - ws.fingertip.position).norm();
   r.limit_margin =
       std::min((r.q - chain.lower_limits()).minCoeff(), (chain.upper_limits() - r.q).minCoeff());
   inhand::point_jacobian(ws, ws.fingertip.position, J);
-  const Eigen::MatrixXd Jd = J;
+  const Eigen::MatrixXd Jd = J * C;
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(Jd);
   r.sigma_min = svd.singularValues()(2);
   return r;
@@ -129,6 +154,12 @@ void check_preset(const HandPreset& hand, const ObjectDef& object, const char* o
           << " q=" << r.q.transpose();
       EXPECT_GT(r.sigma_min, kMinSigma)
           << hand.name << " " << object_name << " " << label << " " << hand.finger_names[i];
+      for (int j = 0; j < chain.dof(); ++j) {  // the IK keeps followers on their leaders
+        const auto& c = chain.joints[j].coupling;
+        if (c.coupled()) {
+          EXPECT_NEAR(r.q(j), c.ratio * r.q(c.leader) + c.offset, 1e-12);
+        }
+      }
       const double clearance = link_clearance(chain, r.q, object, pose);
       EXPECT_GT(clearance, kMinLinkClearance)
           << hand.name << " " << object_name << " " << label << " " << hand.finger_names[i];
@@ -194,6 +225,68 @@ TEST(Presets, ThreeFingerHandIsValidAndConsistent) {
           .ok());
 }
 
+TEST(Presets, AllegroLikeHandIsValidAndConsistent) {
+  const HandPreset hand = inhand::plant::allegro_like_hand();
+  ASSERT_EQ(hand.fingers.size(), 4u);
+  EXPECT_EQ(hand.thumb, 3);
+  for (const auto& f : hand.fingers) {
+    EXPECT_EQ(f.dof(), 4);
+    EXPECT_EQ(f.fingertip_radius, 0.012);
+    EXPECT_TRUE(f.validate().ok());
+  }
+  for (const auto& [t, f] : hand.opposing_pairs)
+    EXPECT_NEAR(hand.approach_directions[t].dot(hand.approach_directions[f]), -1.0, 1e-12);
+  EXPECT_EQ(hand.opposing_pairs.size(), 3u);
+  for (const auto& obj :
+       {inhand::plant::paper_cylinder(hand), inhand::plant::paper_slender_box(hand)})
+    EXPECT_TRUE(
+        inhand::plant::HandPlant::validate(hand.fingers, obj, inhand::plant::default_plant_params())
+            .ok());
+}
+
+// The coupled Shadow-like hand: the fingers' J1 follows J2 (ratio 1, offset 0), its
+// configurations satisfy that, and the plant keeps it: started there, driven by
+// commands whose follower part is wrong, the follower stays on its leader.
+TEST(Presets, ShadowLikeCoupledHandKeepsItsCoupling) {
+  const HandPreset hand = inhand::plant::shadow_like_coupled_hand();
+  ASSERT_EQ(hand.fingers.size(), 4u);
+  for (int k = 0; k < 3; ++k) {
+    const auto& f = hand.fingers[static_cast<std::size_t>(k)];
+    EXPECT_EQ(f.joints[3].coupling.leader, 2);
+    EXPECT_EQ(f.joints[3].coupling.ratio, 1.0);
+    EXPECT_EQ(f.joints[3].coupling.offset, 0.0);
+    EXPECT_EQ(f.actuated_dof(), 3);
+    EXPECT_EQ(hand.open_configuration[static_cast<std::size_t>(k)](3),
+              hand.open_configuration[static_cast<std::size_t>(k)](2));
+    EXPECT_EQ(hand.grasp_configuration[static_cast<std::size_t>(k)](3),
+              hand.grasp_configuration[static_cast<std::size_t>(k)](2));
+  }
+  EXPECT_EQ(hand.fingers[3].actuated_dof(), 5);
+  inhand::plant::HandPlant plant(hand.fingers, inhand::plant::paper_cylinder(hand));
+  PlantFinger::JointVector q = hand.open_configuration[0];
+  q(3) = 0.3;  // inconsistent: the plant puts J1 on J2
+  ASSERT_TRUE(plant.set_joint_positions(0, q));
+  EXPECT_EQ(plant.joint_positions(0)(3), plant.joint_positions(0)(2));
+  PlantFinger::JointVector qd(4);
+  qd << 0.0, 0.2, 0.5, -1.0;  // the follower's part is replaced by the leader's
+  ASSERT_TRUE(plant.set_joint_velocity_command(0, qd));
+  for (int s = 0; s < 500; ++s) plant.step_once();
+  EXPECT_EQ(plant.joint_positions(0)(3), plant.joint_positions(0)(2));
+  EXPECT_EQ(plant.joint_velocities(0)(3), plant.joint_velocities(0)(2));
+  EXPECT_GT(plant.joint_positions(0)(2), hand.open_configuration[0](2) + 0.01);  // it moved
+}
+
+// The hands added after the first two, both objects in one test each.
+class LaterPresets : public ::testing::TestWithParam<HandPreset (*)()> {};
+TEST_P(LaterPresets, ReachBothObjectsUnderOffsets) {
+  const HandPreset hand = GetParam()();
+  check_preset(hand, inhand::plant::paper_cylinder(hand), "cylinder");
+  check_preset(hand, inhand::plant::paper_slender_box(hand), "box");
+}
+INSTANTIATE_TEST_SUITE_P(Presets, LaterPresets,
+                         ::testing::Values(&inhand::plant::allegro_like_hand,
+                                           &inhand::plant::shadow_like_coupled_hand));
+
 TEST(Presets, ShadowLikeHandReachesCylinderUnderOffsets) {
   const HandPreset hand = inhand::plant::shadow_like_hand();
   check_preset(hand, inhand::plant::paper_cylinder(hand), "cylinder");
@@ -213,7 +306,8 @@ TEST(Presets, ThreeFingerHandReachesBoxUnderOffsets) {
 
 TEST(Presets, OpenConfigurationsClearTheObjects) {
   for (const HandPreset& hand :
-       {inhand::plant::shadow_like_hand(), inhand::plant::three_finger_hand()}) {
+       {inhand::plant::shadow_like_hand(), inhand::plant::three_finger_hand(),
+        inhand::plant::allegro_like_hand()}) {
     check_open_configuration(hand, inhand::plant::paper_cylinder(hand));
     check_open_configuration(hand, inhand::plant::paper_slender_box(hand));
   }

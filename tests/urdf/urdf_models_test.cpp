@@ -18,6 +18,8 @@
 #include "common/test_support.hpp"
 #include "common/urdf_hand_models.hpp"
 #include "inhand/sim/presets.hpp"
+#include "inhand/sim/presets_allegro.hpp"
+#include "inhand/sim/presets_coupled.hpp"
 #include "inhand/urdf.hpp"
 
 namespace {
@@ -96,16 +98,23 @@ TEST(UrdfModels, AgreeWithKdlParser) {
 
 // The URDF versions of the presets have the presets' geometry exactly: bases, joint
 // frames, axes, limits, velocity limits, fingertip radius and tip offset (to 1e-15),
-// and equal forward kinematics at scaled(1000) random configurations per finger.
+// and equal forward kinematics (to 1e-12) at scaled(1000) random configurations per
+// finger. The Allegro-like preset writes out its URDF's origins (roll-pitch-yaw through
+// urdfdom's quaternion) and takes the reader's default velocity limit (2 rad/s). The
+// Shadow-like file is compared with both Shadow-like presets; the coupled one also has
+// its mimic joints (leader, ratio, offset).
 TEST(UrdfModels, MatchTheInCodePresets) {
   const std::vector<HandModel> models = hand_models();
-  const inhand::plant::HandPreset presets[2] = {inhand::plant::three_finger_hand(),
-                                                inhand::plant::shadow_like_hand()};
+  const inhand::plant::HandPreset presets[4] = {
+      inhand::plant::three_finger_hand(), inhand::plant::shadow_like_hand(),
+      inhand::plant::allegro_like_hand(), inhand::plant::shadow_like_coupled_hand()};
+  const std::size_t model_of[4] = {0, 1, 2, 1};
   auto rng = inhand_test::make_rng(702);
-  for (int m = 0; m < 2; ++m) {
-    const HandModel& model = models[static_cast<std::size_t>(m)];
+  for (int m = 0; m < 4; ++m) {
+    const HandModel& model = models[model_of[m]];
+    const bool with_coupling = m != 1;  // shadow_like_hand() leaves J1 actuated
     const inhand::plant::HandPreset& preset = presets[m];
-    SCOPED_TRACE(model.file);
+    SCOPED_TRACE(model.file + " vs " + preset.name);
     const auto hand = inhand::urdf::read_fingers_file(urdf_model_path(model.file), model.specs);
     ASSERT_TRUE(hand.ok()) << hand.error;
     ASSERT_EQ(hand.fingers.size(), preset.fingers.size());
@@ -136,6 +145,11 @@ TEST(UrdfModels, MatchTheInCodePresets) {
         EXPECT_EQ(a.lower, b.lower) << "joint " << i;
         EXPECT_EQ(a.upper, b.upper) << "joint " << i;
         EXPECT_EQ(a.max_velocity, b.max_velocity) << "joint " << i;
+        if (with_coupling) {
+          EXPECT_EQ(a.coupling.leader, b.coupling.leader) << "joint " << i;
+          EXPECT_EQ(a.coupling.ratio, b.coupling.ratio) << "joint " << i;
+          EXPECT_EQ(a.coupling.offset, b.coupling.offset) << "joint " << i;
+        }
       }
       inhand::FingerKinematics<Chain> ws_ours(ours);
       inhand::FingerKinematics<inhand::plant::PlantFinger> ws_theirs(theirs);
@@ -220,7 +234,7 @@ TEST(UrdfModels, AllegroLikeHandHasThePublishedJoints) {
 // (radius 20 mm, along X through the origin) on its side: among 40000 random
 // configurations per finger, 0.1 rad inside the joint limits, some put the fingertip
 // sphere on the cylinder (+-2 mm) with the contact normal within 20 deg of +Y (fingers)
-// or -Y (thumb), |x| <= 45 mm. (The placement search found >= 171 such samples for each finger.)
+// or -Y (thumb), |x| <= 45 mm. (With the current placement: >= 179 such samples for each finger.)
 TEST(UrdfModels, AllegroLikeHandReachesTheCylinder) {
   const HandModel model = hand_models()[2];
   const auto hand = inhand::urdf::read_fingers_file(urdf_model_path(model.file), model.specs);

@@ -7,8 +7,14 @@
 //
 // Units: rad, rad/s, s, m. Frame: WORLD (fingertip velocity and link angular
 // velocity). Joint angles turn about the chain's joint axes by the right-hand rule.
+// Coupled joints (JointCoupling, e.g. a tendon-driven distal joint) are not driven:
+// a follower's command is replaced by ratio x its leader's (after the leader's clamp),
+// and its angle is kept at ratio * q_leader + offset (clamped into its own limits)
+// whenever the joints are set or move, so the plant's fingers always satisfy their
+// couplings.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -59,8 +65,10 @@ struct FingerModel {
   std::array<JointVector, PlantParams::kMaxCommandDelay + 1> pending{};
   int pending_head = 0;
 
-  /// Exact sin/cos of q, forward kinematics and the fingertip's rigid-body velocity.
+  /// Exact sin/cos of q (followers first put on their leaders), forward kinematics and
+  /// the fingertip's rigid-body velocity.
   void update_kinematics() noexcept {
+    couple_positions();
     for (int j = 0; j < chain.dof(); ++j) {
       sin_q(j) = std::sin(q(j));
       cos_q(j) = std::cos(q(j));
@@ -101,6 +109,10 @@ struct FingerModel {
         ++counters.velocity_clamped;
       }
       slot(j) = x;
+    }
+    for (int j = 0; j < n; ++j) {
+      const auto& c = chain.joints[j].coupling;
+      if (c.coupled()) slot(j) = c.ratio * slot(c.leader);
     }
     apply_delayed(delay);
     return true;
@@ -143,11 +155,35 @@ struct FingerModel {
       }
       qd(j) = v;
     }
+    if (moved && couple_positions()) {
+      for (int j = 0; j < n; ++j) {
+        if (!chain.joints[j].coupling.coupled()) continue;
+        sin_q(j) = std::sin(q(j));
+        cos_q(j) = std::cos(q(j));
+      }
+    }
     if (moved) forward_kinematics_sincos(chain, sin_q, cos_q, ws);
     update_tip_velocity();
   }
 
  private:
+  /// Puts every follower at ratio * q_leader + offset (clamped into its limits) and its
+  /// velocity at ratio * qd_leader; true if a follower's angle changed. Followers
+  /// integrated from consistent commands already agree (ratio 1, offset 0: bit for bit).
+  bool couple_positions() noexcept {
+    bool changed = false;
+    for (int j = 0; j < chain.dof(); ++j) {
+      const auto& jd = chain.joints[j];
+      if (!jd.coupling.coupled()) continue;
+      const double x = std::clamp(jd.coupling.ratio * q(jd.coupling.leader) + jd.coupling.offset,
+                                  jd.lower, jd.upper);
+      if (x != q(j)) changed = true;
+      q(j) = x;
+      qd(j) = jd.coupling.ratio * qd(jd.coupling.leader);
+    }
+    return changed;
+  }
+
   /// The command written at pending_head goes in the ring; the one given `delay`
   /// commands ago takes effect.
   void apply_delayed(int delay) noexcept {
