@@ -89,8 +89,7 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   if (force_active) force = -sc.forces.velocity(i) * sc.normals.col(i);
   const ControllerWarning w =
       m.layer3.command(m.jacobian, f.joint_positions, v, f.contact.normal,
-                       force_active ? &force : nullptr,
-                       t.config.max_joint_acceleration, t.dt, fo);
+                       force_active ? &force : nullptr, t.config.max_joint_acceleration, t.dt, fo);
   m.last_motion = fo.servo.motion;
   fo.stiffness_estimate = st.forces.stiffness_estimate()(i);
   fo.force_integral = st.forces.integral()(i);

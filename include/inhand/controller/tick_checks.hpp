@@ -67,8 +67,7 @@ const char* non_finite_stage(const typename Types::Output& out) noexcept {
         !all_finite(fo.servo.force) || !all_finite(fo.servo.total))
       return "servo";
     if (!all_finite(fo.joint_velocities) || !is_finite(fo.ik.min_singular_value) ||
-        !is_finite(fo.ik.damping) || !is_finite(fo.ik.limit_scale) ||
-        !is_finite(fo.ik.task_error))
+        !is_finite(fo.ik.damping) || !is_finite(fo.ik.limit_scale) || !is_finite(fo.ik.task_error))
       return "ik";
   }
   return nullptr;
