@@ -52,7 +52,9 @@ FingersResult<Chain> read_fingers_string(const std::string& xml,
   FingersResult<Chain> result;
   const ::urdf::ModelInterfaceSharedPtr model = detail::parse_model(xml, result.error);
   if (!model) return result;
-  return read_fingers<Chain>(*model, specs, options);
+  result = read_fingers<Chain>(*model, specs, options);
+  detail::release_model(*model);
+  return result;
 }
 
 /// The fingers of `specs` read from a URDF file.

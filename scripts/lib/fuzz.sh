@@ -9,10 +9,10 @@
 #                               Returns non-zero if any target found a crash, a leak,
 #                               a sanitizer report, a timeout or an out-of-memory.
 # Corpora persist in DIR/corpus/<target> (the scenario fuzzer is seeded with
-# scenarios/**/*.json); reproducers of findings go to DIR/artifacts/<target>/ and each
+# scenarios/**/*.json, the URDF fuzzer with models/urdf/*.urdf); reproducers of findings go to DIR/artifacts/<target>/ and each
 # run's log to DIR/logs/<target>.log.
 
-INHAND_FUZZ_TARGETS=(fuzz_controller_update fuzz_scenario_json)
+INHAND_FUZZ_TARGETS=(fuzz_controller_update fuzz_scenario_json fuzz_urdf_reader)
 
 # The clang C and C++ compilers (clang-14 names first, as Debian installs them).
 fuzz_compilers() {
@@ -43,11 +43,14 @@ fuzz_build() {
 fuzz_seed() {
   local target=$1 corpus=$2 f
   mkdir -p "$corpus"
-  if [[ $target == fuzz_scenario_json ]]; then
-    for f in "$root"/scenarios/*/*.json; do
-      if [[ -e $f && ! -e $corpus/seed_$(basename "$f") ]]; then cp "$f" "$corpus/seed_$(basename "$f")"; fi
-    done
-  fi
+  local seeds=()
+  case $target in
+    fuzz_scenario_json) seeds=("$root"/scenarios/*/*.json) ;;
+    fuzz_urdf_reader) seeds=("$root"/models/urdf/*.urdf) ;;
+  esac
+  for f in "${seeds[@]}"; do
+    if [[ -e $f && ! -e $corpus/seed_$(basename "$f") ]]; then cp "$f" "$corpus/seed_$(basename "$f")"; fi
+  done
   return 0
 }
 
@@ -74,8 +77,10 @@ fuzz_run() {
     fi
     fuzz_seed "$t" "$dir/corpus/$t"
     mkdir -p "$dir/artifacts/$t"
-    # -rss_limit_mb and -timeout turn memory blow-ups and hangs into findings.
-    "$exe" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+    # -rss_limit_mb and -timeout turn memory blow-ups and hangs into findings; the leak
+    # suppressions (scripts/lib/lsan.supp) name urdfdom's own leak, nothing of inhand's.
+    LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/scripts/lib/lsan.supp} \
+      "$exe" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
       -artifact_prefix="$dir/artifacts/$t/" "$dir/corpus/$t" >"$dir/logs/$t.log" 2>&1 &
     pids+=($!)
     names+=("$t")

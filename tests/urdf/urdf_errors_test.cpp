@@ -80,6 +80,11 @@ std::vector<BadCase> bad_cases() {
        "tip", "nowhere"},
       {"mimic of itself", hand("selfish", "revolute", ok_inner + "<mimic joint='selfish'/>"), "tip",
        "selfish"},
+      {"links in a cycle (a fuzzed document: the walk to the root never ended)",
+       "<robot name='r'><link name='palm'/><link name='a'/><link name='b'/>" +
+           joint("ja", "revolute", "b", "a", ok_inner) +
+           joint("jb", "revolute", "a", "b", ok_inner) + "</robot>",
+       "a", "cycle"},
       {"negative fingertip sphere",
        "<robot name='r'><link name='palm'/><link name='tip'><collision><geometry>"
        "<sphere radius='-0.01'/></geometry></collision></link>" +

@@ -65,6 +65,19 @@ inline ::urdf::ModelInterfaceSharedPtr parse_model(const std::string& xml, std::
 }
 
 /// Reads a whole file into `text`. Returns false, with `error` set, if it cannot.
+/// Clears the links' child and parent-joint pointers so that the model is freed even
+/// when its link graph has a cycle (urdfdom keeps children by shared pointer, and does
+/// not refuse every cyclic document: such a model would otherwise never be freed).
+inline void release_model(::urdf::ModelInterface& model) noexcept {
+  for (auto& entry : model.links_) {
+    if (!entry.second) continue;
+    entry.second->child_links.clear();
+    entry.second->child_joints.clear();
+    entry.second->parent_joint.reset();
+  }
+  model.root_link_.reset();
+}
+
 inline bool read_text_file(const std::string& path, std::string& text, std::string& error) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream buffer;

@@ -82,6 +82,14 @@ inline std::vector<::urdf::JointConstSharedPtr> joint_path(const ::urdf::ModelIn
     return path;
   }
   while (link->name != spec.root_link) {
+    // A tree of L links has paths of at most L - 1 joints; a longer walk is a cycle
+    // (urdfdom does not refuse every one of them: a fuzzed file had one).
+    if (path.size() >= model.links_.size()) {
+      error = "the links above tip link '" + spec.tip_link + "' form a cycle (through link '" +
+              link->name + "')";
+      path.clear();
+      return path;
+    }
     const ::urdf::JointConstSharedPtr joint = link->parent_joint;
     if (!joint) {
       error = "tip link '" + spec.tip_link + "' is not below root link '" + spec.root_link +
