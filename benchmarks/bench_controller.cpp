@@ -15,7 +15,8 @@
 // controller/<hand>: planar2x2, planar2x3 (two opposing planar fingers), spatial3x3
 //   (the three-finger preset), allegro4 (4 fingers x 4 DOF), shadow4 (the Shadow-like
 //   preset: 3 fingers x 4 DOF + a 5-DOF thumb), shadow5 (4 fingers x 4 DOF + the
-//   5-DOF thumb).
+//   5-DOF thumb), shadow4_coupled (shadow4 with coupled distal joints; double, bounded).
+//   The joint position limits are on in every hand (the default), not binding.
 // scaling/<n>: n = 2..6 fingers of 4 DOF (the 4-joint thumb and n - 1 fingers), for
 //   the linear fit of the tick time against the finger count.
 #include "bench_support.hpp"
@@ -181,6 +182,8 @@ void add_scaling() {
 }  // namespace
 
 void register_controller_benchmarks() {
+  add_controller<double, 3, 4, Dynamic, 5>("controller", "shadow4_coupled", "bounded",
+                                           shadow4_coupled_hand());
   add_hand_grid<double>();
   add_hand_grid<float>();
   add_scaling<2>();

@@ -226,6 +226,7 @@ int main(int argc, char** argv) {
       {"controller/shadow4/double/bounded", "whole tick, Shadow-like hand (3x4 + 5-DOF thumb)"},
       {"controller/shadow4/double/dynamic", "same, heap-sized controller"},
       {"controller/shadow4/float/bounded", "same, float"},
+      {"controller/shadow4_coupled/double/bounded", "same, distal joints coupled"},
       {"controller/shadow5/double/bounded", "whole tick, 4x4 + 5-DOF thumb"},
       {"controller/allegro4/double/fixed", "whole tick, 4 fingers x 4 DOF"},
       {"controller/spatial3x3/double/fixed", "whole tick, 3 fingers x 3 DOF"},

@@ -34,6 +34,7 @@
 #include "alloc_counter.hpp"
 #include "inhand/inhand.hpp"
 #include "inhand/sim/presets.hpp"
+#include "inhand/sim/presets_coupled.hpp"
 
 namespace inhand_bench {
 
@@ -128,6 +129,14 @@ inline HandDef<3> from_preset(const inhand::plant::HandPreset& p) {
 inline HandDef<3> shadow4_hand() {
   HandDef<3> h = from_preset(inhand::plant::shadow_like_hand());
   h.name = "shadow4";
+  return h;
+}
+
+/// shadow4 with each finger's distal joint following its middle one (the Shadow hand's
+/// tendon; sim/presets_coupled.hpp): 3 actuated joints per finger, the joint limits on.
+inline HandDef<3> shadow4_coupled_hand() {
+  HandDef<3> h = from_preset(inhand::plant::shadow_like_coupled_hand());
+  h.name = "shadow4_coupled";
   return h;
 }
 
