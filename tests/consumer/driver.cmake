@@ -11,8 +11,9 @@
 #                     and that the include path is STAGE/INCLUDEDIR. With STRICT=ON:
 #                     every other -I of those flags (Eigen's) becomes -isystem, inhand's
 #                     stays -I, and WARNING_FLAGS ('|'-separated, with -Werror) are added
-#   ACTION=readme     README's block between <!-- tour:begin --> and <!-- tour:end -->
-#                     (without its ``` fences) must equal the file TOUR
+#   ACTION=readme     the block of the Markdown file README between <!-- MARKER:begin -->
+#                     and <!-- MARKER:end --> (MARKER defaults to tour; without its ```
+#                     fences) must equal the file TOUR
 cmake_minimum_required(VERSION 3.16)
 
 function(run)
@@ -103,24 +104,29 @@ elseif(ACTION STREQUAL "pkgconfig")
   compile_and_run("${SOURCE}" "${OUTPUT}" "-std=c++17;${flags}")
 
 elseif(ACTION STREQUAL "readme")
-  file(READ "${README}" readme)
-  string(FIND "${readme}" "<!-- tour:begin -->" begin)
-  string(FIND "${readme}" "<!-- tour:end -->" end)
-  if(begin EQUAL -1 OR end EQUAL -1 OR end LESS begin)
-    message(FATAL_ERROR "${README}: tour markers missing or out of order")
+  if(NOT MARKER)
+    set(MARKER tour)
   endif()
-  math(EXPR start "${begin} + 19")  # length of "<!-- tour:begin -->"
+  set(open_marker "<!-- ${MARKER}:begin -->")
+  file(READ "${README}" readme)
+  string(FIND "${readme}" "${open_marker}" begin)
+  string(FIND "${readme}" "<!-- ${MARKER}:end -->" end)
+  if(begin EQUAL -1 OR end EQUAL -1 OR end LESS begin)
+    message(FATAL_ERROR "${README}: ${MARKER} markers missing or out of order")
+  endif()
+  string(LENGTH "${open_marker}" marker_length)
+  math(EXPR start "${begin} + ${marker_length}")
   math(EXPR length "${end} - ${start}")
   string(SUBSTRING "${readme}" ${start} ${length} block)
   # Drop the opening fence line (```cpp) and the closing fence (```).
   if(NOT block MATCHES "^[ \t\r\n]*```[a-z+]*\r?\n(.*)\n```[ \t\r\n]*$")
-    message(FATAL_ERROR "${README}: the tour block is not a single fenced code block")
+    message(FATAL_ERROR "${README}: the ${MARKER} block is not a single fenced code block")
   endif()
   set(code "${CMAKE_MATCH_1}\n")
   file(READ "${TOUR}" tour)
   if(NOT code STREQUAL tour)
     file(WRITE "${OUTPUT}" "${code}")
-    message(FATAL_ERROR "README.md's API tour differs from ${TOUR}; the README block is in "
+    message(FATAL_ERROR "${README}: the ${MARKER} block differs from ${TOUR}; the block is in "
                         "${OUTPUT}: compare them with diff")
   endif()
 

@@ -7,12 +7,14 @@
 #                              -Werror (Eigen as a system directory, inhand not): the
 #                              controller in double and float (strict/main.cpp)
 #   consumer.pkg_config_strict_sim  the same for the simulator (strict/sim_main.cpp)
-#   consumer.pkg_config_readme_tour the same for README.md's whole-hand loop, against the
-#                              installed prefix (readme_tour.cpp)
+#   consumer.pkg_config_readme_tour the same for docs/tour.md's whole-hand loop, against
+#                              the installed prefix (readme_tour.cpp)
 #   consumer.add_subdirectory  add_subdirectory(<repo> inhand); subproject options OFF
 #   consumer.header_dropin     c++ -std=c++17 -I include -I <eigen> only
-#   consumer.readme_tour       README.md's whole-hand tour, compiled and run
-#   consumer.readme_tour_in_sync  README.md's tour block == readme_tour.cpp
+#   consumer.readme_tour       docs/tour.md's whole-hand loop, compiled and run
+#   consumer.readme_tour_in_sync  docs/tour.md's tour block == readme_tour.cpp
+#   consumer.readme_allegro_in_sync  README.md's first program (allegro block) ==
+#                              examples/05_allegro_urdf/main.cpp (run as example.05_allegro_urdf)
 # and example.<name>, which runs examples/<name>.cpp (finger_tracking, 01_finger_servo,
 # 02_whole_hand, 03_external_kinematics, 04_planar_hand); each exits non-zero unless its
 # own check passed.
@@ -100,18 +102,25 @@ add_test(NAME consumer.header_dropin
           -DOUTPUT=${INHAND_CONSUMER_BIN}/header_dropin/consumer
           -P ${INHAND_CONSUMER_DRIVER})
 
-# The README's API tour compiles as written and checks its own result.
+# The core's whole-hand loop (docs/tour.md) compiles as written and checks its own result.
 add_executable(consumer_readme_tour ${INHAND_CONSUMER_SRC}/readme_tour.cpp)
 target_link_libraries(consumer_readme_tour PRIVATE inhand::inhand inhand_warnings)
 add_test(NAME consumer.readme_tour COMMAND consumer_readme_tour)
 add_test(NAME consumer.readme_tour_in_sync
-  COMMAND ${CMAKE_COMMAND} -DACTION=readme -DREADME=${PROJECT_SOURCE_DIR}/README.md
+  COMMAND ${CMAKE_COMMAND} -DACTION=readme -DREADME=${PROJECT_SOURCE_DIR}/docs/tour.md
           -DTOUR=${INHAND_CONSUMER_SRC}/readme_tour.cpp
           -DOUTPUT=${INHAND_CONSUMER_BIN}/readme_tour_from_readme.cpp
           -P ${INHAND_CONSUMER_DRIVER})
+# The README's first program is the Allegro example, word for word.
+add_test(NAME consumer.readme_allegro_in_sync
+  COMMAND ${CMAKE_COMMAND} -DACTION=readme -DMARKER=allegro -DREADME=${PROJECT_SOURCE_DIR}/README.md
+          -DTOUR=${PROJECT_SOURCE_DIR}/examples/05_allegro_urdf/main.cpp
+          -DOUTPUT=${INHAND_CONSUMER_BIN}/allegro_from_readme.cpp
+          -P ${INHAND_CONSUMER_DRIVER})
 
 set_tests_properties(consumer.add_subdirectory consumer.header_dropin consumer.readme_tour
-  consumer.readme_tour_in_sync PROPERTIES LABELS consumer TIMEOUT 300)
+  consumer.readme_tour_in_sync consumer.readme_allegro_in_sync PROPERTIES LABELS consumer
+  TIMEOUT 300)
 if(INHAND_INSTALL)
   set_tests_properties(consumer.install consumer.find_package PROPERTIES LABELS consumer
     TIMEOUT 300)
