@@ -23,6 +23,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <functional>
+#include <map>
 #include <memory>
 #include <random>
 #include <stdexcept>
@@ -409,6 +412,9 @@ std::vector<FingerSample<Dim>> random_finger_samples(const HandDef<Dim>& hand, i
 /// allocated, a fixture that could not be set up); main() fails if any.
 std::vector<std::string>& rule_violations();
 
+/// Turns callgrind's instrumentation on or off (main.cpp; nothing outside valgrind).
+void instrumentation(bool on);
+
 /// Runs a fixture: Fixture(args...) is the set-up (not timed); the timed loop calls
 /// tick() once per iteration. Fixtures that set `kMaintenancePeriod` > 0 get
 /// maintain() called every that many ticks with the timer paused (e.g. a controller
@@ -456,9 +462,34 @@ inline double max_statistic(const std::vector<double>& v) {
   return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end());
 }
 
+/// Instruction counting (scripts/bench, under valgrind's callgrind): per benchmark
+/// name, a function that sets the fixture up, runs `warmup` ticks, then `ticks` ticks
+/// with callgrind's instrumentation on (CALLGRIND_START/STOP_INSTRUMENTATION: no-ops
+/// outside valgrind). Returns false if the set-up failed.
+using TickCounter = std::function<bool(long warmup, long ticks)>;
+std::map<std::string, TickCounter>& tick_counters();
+
+template <typename Fixture>
+void run_counted_ticks(Fixture& f, long warmup, long ticks) {
+  for (long k = 0; k < warmup; ++k) benchmark::DoNotOptimize(f.tick());
+  instrumentation(true);
+  for (long k = 0; k < ticks; ++k) benchmark::DoNotOptimize(f.tick());
+  instrumentation(false);
+}
+
 /// Registers `Fixture` under `name` with the suite's common settings.
 template <typename Fixture, typename... Args>
 benchmark::internal::Benchmark* add(const std::string& name, bool allocation_free, Args... args) {
+  tick_counters()[name] = [=](long warmup, long ticks) {
+    try {
+      Fixture f(args...);
+      run_counted_ticks(f, warmup, ticks);
+      return true;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: set-up failed: %s\n", name.c_str(), e.what());
+      return false;
+    }
+  };
   benchmark::internal::Benchmark* b =
       benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& state) {
         run_fixture<Fixture>(state, name, allocation_free, args...);
