@@ -292,7 +292,9 @@ TEST(CoupledJoints, CommandsKeepTheRatioAndMeetTheTask) {
     auto rng = make_rng(31);
     for (int k = 0; k < scaled(200); ++k) {
       Servo4 servo;
-      servo.configure(chain, gains, ikp);
+      Servo4::Memory memory;
+      servo.configure(chain, ikp);
+      memory.configure(4, gains);
       Eigen::Vector4d q;
       for (int i = 0; i < 4; ++i)
         q(i) = uniform(rng, chain.joints[i].lower * 0.5, chain.joints[i].upper * 0.5);
@@ -303,7 +305,7 @@ TEST(CoupledJoints, CommandsKeepTheRatioAndMeetTheTask) {
       inhand::point_jacobian(ws, ws.fingertip.position, J);
       const Eigen::Vector3d v = Eigen::Vector3d::Random() * 0.01;
       FingerOut fo;
-      servo.command(J, q, v, Eigen::Vector3d::UnitY(), nullptr,
+      servo.command(memory, J, q, v, Eigen::Vector3d::UnitY(), nullptr,
                     std::numeric_limits<double>::infinity(), 1e-3, fo);
       EXPECT_DOUBLE_EQ(fo.joint_velocities(3), ratio * fo.joint_velocities(2)) << "ratio " << ratio;
       if (fo.ik.status == IkStatus::ok) {
@@ -324,7 +326,9 @@ TEST(CoupledJoints, ClosedLoopStopsAtTheLimitLessTheMargin) {
   inhand::IkParams<double> ikp;
   ikp.joint_limit_margin = 0.02;
   Servo4 servo;
-  servo.configure(chain, gains, ikp);
+  Servo4::Memory memory;
+  servo.configure(chain, ikp);
+  memory.configure(4, gains);
   Eigen::Vector4d q(0.0, 0.3, 0.3, 0.3);
   inhand::FingerKinematics<Chain4> ws(chain);
   bool flagged = false;
@@ -337,7 +341,8 @@ TEST(CoupledJoints, ClosedLoopStopsAtTheLimitLessTheMargin) {
     // both towards their limits.
     const Eigen::Vector3d v = J.col(2) + J.col(3);
     FingerOut fo;
-    const auto w = servo.command(J, q, v, Eigen::Vector3d::UnitY(), nullptr, 200.0, dt, fo);
+    const auto w =
+        servo.command(memory, J, q, v, Eigen::Vector3d::UnitY(), nullptr, 200.0, dt, fo);
     flagged = flagged || inhand::has(w, inhand::ControllerWarning::joint_position_limited);
     q += fo.joint_velocities * dt;
     ASSERT_LE(q(3), 0.6 - 0.02 + 1e-12) << "tick " << k;

@@ -75,7 +75,7 @@ template <typename Types>
 ControllerWarning command_finger(const TickInput<Types>& t, int i,
                                  const FingerPoints<Types>& points, const typename Types::Vec& p,
                                  const typename Types::Vec& v, bool force_active,
-                                 ControllerState<Types>& st, const TickScratch<Types>& sc,
+                                 ControllerState<Types>& st, TickScratch<Types>& sc,
                                  typename Types::FingerOutput& fo) noexcept {
   using Scalar = typename Types::ScalarType;
   FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
@@ -88,7 +88,7 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   Vec force = Vec::Zero();
   if (force_active) force = -sc.forces.velocity(i) * sc.normals.col(i);
   const ControllerWarning w =
-      m.layer3.command(m.jacobian, f.joint_positions, v, f.contact.normal,
+      sc.fingers[static_cast<std::size_t>(i)].layer3.command(m.layer3, m.jacobian, f.joint_positions, v, f.contact.normal,
                        force_active ? &force : nullptr, t.config.max_joint_acceleration, t.dt, fo);
   m.last_motion = fo.servo.motion;
   fo.stiffness_estimate = st.forces.stiffness_estimate()(i);
@@ -100,10 +100,11 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
 
 /// Finger i's kinematics this tick; its contact's plausibility flagged in fo and w.
 template <typename Types>
-FingerPoints<Types> finger_points(const TickInput<Types>& t, int i, FingerMemory<Types>& m,
+FingerPoints<Types> finger_points(const TickInput<Types>& t, int i, TickScratch<Types>& sc,
                                   typename Types::FingerOutput& fo, ControllerWarning& w) noexcept {
   const FingerPoints<Types> points(t.config.fingers[static_cast<std::size_t>(i)],
-                                   t.in.fingers[static_cast<std::size_t>(i)], m.kinematics);
+                                   t.in.fingers[static_cast<std::size_t>(i)],
+                                   sc.fingers[static_cast<std::size_t>(i)].kinematics);
   fo.implausible_contact = points.implausible_contact(t.config.contact_tolerance);
   if (fo.implausible_contact) w |= ControllerWarning::implausible_contact;
   return points;
@@ -133,7 +134,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
     typename Types::FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
-    const FingerPoints<Types> points = detail::finger_points(t, i, m, fo, w);
+    const FingerPoints<Types> points = detail::finger_points(t, i, sc, fo, w);
     if (f.contact.touching) {
       if (m.state == FingerState::approaching) m.layer3.servo.reset_force();
       m.state = FingerState::pressing;
@@ -217,7 +218,7 @@ ControllerStatus manipulation_phase(
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
     typename Types::FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
-    const FingerPoints<Types> points = detail::finger_points(t, i, m, fo, w);
+    const FingerPoints<Types> points = detail::finger_points(t, i, sc, fo, w);
     if (f.contact.touching) {
       if (m.state == FingerState::reacquiring) m.layer3.servo.reset_force();
       m.state = FingerState::in_contact;

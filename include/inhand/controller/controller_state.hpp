@@ -1,8 +1,10 @@
 // What the controller remembers from one tick to the next (ControllerState), and the
 // preallocated per-tick workspace (TickScratch) that carries values between the steps
 // of one tick without allocating. The state is copied before every tick and put back
-// if the tick produces a non-finite value (reactive_controller.hpp); the scratch is
-// rewritten every tick before it is read. Units as in controller_io.hpp.
+// if the tick produces a non-finite value (reactive_controller.hpp), so it holds only
+// what a tick reads from an earlier one; the scratch (forward kinematics, the IK and
+// its workspace, what layer 3 derives from the chains) is rewritten every tick before
+// it is read. Units as in controller_io.hpp.
 #pragma once
 
 #include "inhand/controller/controller_io.hpp"
@@ -24,8 +26,8 @@ template <typename Types>
 struct FingerMemory {
   using Scalar = typename Types::ScalarType;
   using Vec = typename Types::Vec;
-  FingerKinematics<typename Types::Chain> kinematics{};  ///< forward kinematics workspace
-  FingerServo<Scalar, Types::kDim, Types::kDof, Types::kMaxDof> layer3{};
+  /// Layer 3's servo integrators and last command.
+  FingerServoMemory<Scalar, Types::kDim, Types::kDof, Types::kMaxDof> layer3{};
   /// The Jacobian of the point servoed on the last tick: this tick's measured advance
   /// of the fingertip is J (q - q_prev).
   typename Types::Jacobian jacobian{};
@@ -66,9 +68,7 @@ struct ControllerState {
     for (int i = 0; i < n; ++i) {
       const typename Types::FingerConfig& fc = c.fingers[static_cast<std::size_t>(i)];
       FingerMemory<Types>& m = fingers[static_cast<std::size_t>(i)];
-      m.kinematics.joint_origins.setZero(Dim, fc.chain.dof());
-      m.kinematics.joint_axes.setZero(3, fc.chain.dof());
-      m.layer3.configure(fc.chain, c.servo, c.ik);
+      m.layer3.configure(fc.chain.dof(), c.servo);
       m.jacobian.setZero(Dim, fc.chain.dof());
       m.q_prev.setZero(fc.chain.dof());
       planner.set_role(i, fc.role);
@@ -94,10 +94,19 @@ struct ControllerState {
   }
 };
 
+/// One finger's per-tick workspace: forward kinematics, and layer 3 (the IK, the joint
+/// limits and couplings read from the chain).
+template <typename Types>
+struct FingerWork {
+  FingerKinematics<typename Types::Chain> kinematics{};
+  FingerServo<typename Types::ScalarType, Types::kDim, Types::kDof, Types::kMaxDof> layer3{};
+};
+
 template <typename Types>
 struct TickScratch {
   using Planner = ForcePlanner<typename Types::ScalarType, Types::kDim, Types::kNumFingers>;
   using Forces = ForceLayer<typename Types::ScalarType, Types::kDim, Types::kNumFingers>;
+  detail::FingerArray<FingerWork<Types>, Types::kNumFingers> fingers{};
   typename Planner::Mask touching{};
   typename Planner::Normals normals{};       ///< unit outward normals of the touching
   typename Planner::Normals points{};        ///< m, contact points of the touching
@@ -105,7 +114,18 @@ struct TickScratch {
   typename Planner::ForceVector measured{};  ///< N, gated normal forces
   typename Planner::ForceVector advance{};   ///< m, measured normal advance this tick
   typename Forces::Result forces{};
-  void resize(int n) {
+  /// Sizes and configures every part for the configuration (allocates only for
+  /// run-time sizes).
+  void size_for(const typename Types::Config& c) {
+    const int n = static_cast<int>(c.fingers.size());
+    if constexpr (Types::kNumFingers == Dynamic) fingers.resize(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      const typename Types::FingerConfig& fc = c.fingers[static_cast<std::size_t>(i)];
+      FingerWork<Types>& w = fingers[static_cast<std::size_t>(i)];
+      w.kinematics.joint_origins.setZero(Types::kDim, fc.chain.dof());
+      w.kinematics.joint_axes.setZero(3, fc.chain.dof());
+      w.layer3.configure(fc.chain, c.ik);
+    }
     touching = Planner::Mask::Zero(n);
     normals = Planner::Normals::Zero(Types::kDim, n);
     points = Planner::Normals::Zero(Types::kDim, n);

@@ -29,27 +29,41 @@
 
 namespace inhand {
 
-/// The layer-3 state of one finger: servo, IK workspace, last command, joint limits.
+/// What layer 3 of one finger remembers from one tick to the next: the servo's
+/// integrators and the last command (the continuity bound's reference). The controller
+/// saves it with the rest of its state before every tick; FingerServo below holds the
+/// rest (what it derives from the chain, the IK's workspace), which nothing carries over.
 template <typename Scalar, int Dim, int Dof, int MaxDof = Dof>
-struct FingerServo {
+struct FingerServoMemory {
+  using JointVector = typename ContactIk<Scalar, Dim, Dof, MaxDof>::JointVector;
+  HybridServo<Scalar, Dim> servo{};
+  JointVector last_command{};  ///< rad/s, the last valid tick's joint velocities
+
+  /// Sizes for `dof` joints (allocates only for run-time DOF without a bound), servo
+  /// integrators and last command zero.
+  void configure(int dof, const ServoGains<Scalar>& gains) {
+    servo.set_gains(gains);
+    last_command.setZero(dof);
+  }
+};
+
+/// Layer 3 of one finger: the joint limits and couplings read from its chain, and the
+/// IK with its workspace. command() reads and updates a FingerServoMemory.
+template <typename Scalar, int Dim, int Dof, int MaxDof = Dof>
+class FingerServo {
+ public:
   using JointVector = typename ContactIk<Scalar, Dim, Dof, MaxDof>::JointVector;
   using Jacobian = typename ContactIk<Scalar, Dim, Dof, MaxDof>::Jacobian;
   using Vec = Vector<Scalar, Dim>;
-
-  HybridServo<Scalar, Dim> servo{};
-  ContactIk<Scalar, Dim, Dof, MaxDof> ik{};
-  JointVector last_command{};  ///< rad/s, the last valid tick's joint velocities
+  using Memory = FingerServoMemory<Scalar, Dim, Dof, MaxDof>;
 
   /// Sizes and configures from the finger's chain (allocates only for run-time DOF
   /// without a bound).
   template <typename Chain>
-  void configure(const Chain& chain, const ServoGains<Scalar>& gains,
-                 const IkParams<Scalar>& ik_params) {
+  void configure(const Chain& chain, const IkParams<Scalar>& ik_params) {
     const int dof = chain.dof();
-    ik.set_dof(dof);
-    ik.set_params(ik_params);
-    servo.set_gains(gains);
-    last_command.setZero(dof);
+    ik_.set_dof(dof);
+    ik_.set_params(ik_params);
     max_velocity_ = chain.velocity_limits();
     lower_ = chain.lower_limits();
     upper_ = chain.upper_limits();
@@ -69,14 +83,15 @@ struct FingerServo {
 
   /// One tick: contact velocity v [m/s] and force velocity `force` [m/s] (-u n, or zero
   /// when no force is servoed) at the point whose Jacobian is J, joint positions q [rad];
-  /// `normal` the measured normal (unused by the motion part). Writes the servo command
-  /// and status, the IK report and the joint velocities; returns the warnings raised.
+  /// `normal` the measured normal (unused by the motion part). Updates `memory` (servo
+  /// integrators, last command); writes the servo command and status, the IK report
+  /// and the joint velocities; returns the warnings raised.
   template <typename FingerOutput>
-  ControllerWarning command(const Jacobian& J, const JointVector& q, const Vec& v,
+  ControllerWarning command(Memory& memory, const Jacobian& J, const JointVector& q, const Vec& v,
                             const Vec& normal, const Vec* force, Scalar max_joint_acceleration,
                             Scalar dt, FingerOutput& fo) noexcept {
     ControllerWarning w = ControllerWarning::none;
-    fo.servo_status = servo.update(v, Scalar(0), Scalar(0), normal, false, dt, fo.servo);
+    fo.servo_status = memory.servo.update(v, Scalar(0), Scalar(0), normal, false, dt, fo.servo);
     if (force != nullptr) {
       fo.servo.force = *force;
       fo.servo.total = fo.servo.motion + fo.servo.force;
@@ -84,9 +99,9 @@ struct FingerServo {
     if (fo.servo_status != ServoStatus::ok) w |= ControllerWarning::servo_saturated;
     actuated_problem(J, q, dt);
     if (limits_)
-      fo.ik = ik.solve(ja_, fo.servo.total, vmax_, lo_, hi_, fo.joint_velocities);
+      fo.ik = ik_.solve(ja_, fo.servo.total, vmax_, lo_, hi_, fo.joint_velocities);
     else
-      fo.ik = ik.solve(ja_, fo.servo.total, vmax_, fo.joint_velocities);
+      fo.ik = ik_.solve(ja_, fo.servo.total, vmax_, fo.joint_velocities);
     follow_leaders(fo.joint_velocities);
     if (has(fo.ik.status, IkStatus::damped)) w |= ControllerWarning::ik_damped;
     if (has(fo.ik.status, IkStatus::limited)) w |= ControllerWarning::joint_velocity_limited;
@@ -94,10 +109,10 @@ struct FingerServo {
       w |= ControllerWarning::joint_position_limited;
     const Scalar max_step = max_joint_acceleration * dt;
     if (max_step < std::numeric_limits<Scalar>::infinity()) {
-      const Scalar largest = (fo.joint_velocities - last_command).cwiseAbs().maxCoeff();
+      const Scalar largest = (fo.joint_velocities - memory.last_command).cwiseAbs().maxCoeff();
       if (largest > max_step) {
         fo.joint_velocities =
-            last_command + (max_step / largest) * (fo.joint_velocities - last_command);
+            memory.last_command + (max_step / largest) * (fo.joint_velocities - memory.last_command);
         // A convex combination of two commands within the velocity limits: only rounding
         // can leave them; clamp it away (this only shrinks the step). The position box
         // may be left (last tick's command was for last tick's box): stop there.
@@ -113,7 +128,7 @@ struct FingerServo {
         w |= ControllerWarning::rate_limited;
       }
     }
-    last_command = fo.joint_velocities;
+    memory.last_command = fo.joint_velocities;
     return w;
   }
 
@@ -147,6 +162,7 @@ struct FingerServo {
   }
 
   using IndexVector = Eigen::Matrix<int, Dof, 1, Eigen::ColMajor, MaxDof, 1>;
+  ContactIk<Scalar, Dim, Dof, MaxDof> ik_{};
   JointVector max_velocity_{};     ///< rad/s, per joint (> 0)
   JointVector lower_{}, upper_{};  ///< rad, position limits
   IndexVector leader_{};           ///< per joint: its leader, or -1 (actuated)

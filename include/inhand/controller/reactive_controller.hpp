@@ -109,7 +109,7 @@ class ReactiveController {
     if (!v.ok()) return v;
     config_ = c;
     state_.size_for(config_);
-    scratch_.resize(finger_count());
+    scratch_.size_for(config_);
     configured_ = true;
     reset();
     saved_ = state_;  // sizes the saved copy once (run-time sizes allocate here only)
