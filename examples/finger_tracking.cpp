@@ -90,7 +90,9 @@ int main() {
   gains.force = {0.04, 0.2};
   gains.force.output_limit = 0.05;  // never approach faster than 5 cm/s
   inhand::HybridServo<double, 3> servo(gains);
-  inhand::ContactIk<double, 3, 3> ik;
+  inhand::IkParams<double> ik_params;
+  ik_params.exact_min_singular_value = true;  // the table prints sigma_min on every row
+  inhand::ContactIk<double, 3, 3> ik(3, ik_params);
 
   // ---- Initial state: fingertip resting on the surface with zero force -----------
   Chain::JointVector q(0.0, 0.5, 0.8);

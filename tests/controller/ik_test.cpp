@@ -206,6 +206,14 @@ TYPED_TEST(IkShapeTest, SingularJacobianIsDampedAndBounded) {
   inhand_test::record("max_qdot_over_gain_bound_xdot", worst);
 }
 
+/// IkParams asking for sigma_min on every solve (IkParams::exact_min_singular_value).
+template <typename S>
+inhand::IkParams<S> exact_sigma_params() {
+  inhand::IkParams<S> p;
+  p.exact_min_singular_value = true;
+  return p;
+}
+
 // The reported sigma_min is the true one (JacobiSVD), also for m > n:
 // |sigma_rep^2 - sigma_true^2| <= 20 eps sigma_max^2 (the Gram matrix resolves sigma^2).
 TYPED_TEST(IkShapeTest, ReportedMinSingularValueMatchesJacobiSvd) {
@@ -213,7 +221,7 @@ TYPED_TEST(IkShapeTest, ReportedMinSingularValueMatchesJacobiSvd) {
   using S = typename Sh::Scalar;
   constexpr int m = Sh::kRows, n = Sh::kCols, k = m < n ? m : n;
   Rng rng(205);
-  auto ik = Sh::make_ik();
+  auto ik = Sh::make_ik(exact_sigma_params<S>());
   double worst = 0.0;
   const int count = sweep_count();
   for (int t = 0; t < count; ++t) {
@@ -229,8 +237,54 @@ TYPED_TEST(IkShapeTest, ReportedMinSingularValueMatchesJacobiSvd) {
     worst = std::max(worst, err);
     ASSERT_LE(err, 20.0) << "reported " << rs << " true " << ts << ", sample " << t;
     ASSERT_EQ(has(rep.status, IkStatus::damped), rs < 5e-3) << "sample " << t;
+    ASSERT_TRUE(rep.min_singular_value_exact);
   }
   inhand_test::record("sigma2_error_over_eps_sigmamax2", worst);
+}
+
+// The default (exact_min_singular_value false) computes sigma_min only where it sets the
+// damping. Over the same sweep (sigma_min from 1e-6 to 1, across the threshold): the
+// report is either exact (as above) or, outside the damped region only, the threshold
+// with the true sigma_min^2 at least threshold^2 - 20 eps sigma_max^2; the damping and
+// the command equal those of an exact solver to rounding.
+TYPED_TEST(IkShapeTest, CertifiedSigmaKeepsTheCommandAndBoundsSigma) {
+  using Sh = TypeParam;
+  using S = typename Sh::Scalar;
+  constexpr int m = Sh::kRows, n = Sh::kCols, k = m < n ? m : n;
+  Rng rng(206);
+  auto fast = Sh::make_ik();
+  auto exact = Sh::make_ik(exact_sigma_params<S>());
+  const double threshold = 5e-3, tol = std::is_same<S, double>::value ? 1e-12 : 1e-5;
+  int certified = 0, computed = 0;
+  const int count = sweep_count();
+  for (int t = 0; t < count; ++t) {
+    const double smin = std::exp(uniform(rng, std::log(1e-6), 0.0));
+    VecXd s = random_singular_values(k, smin, 2.0, rng);
+    s(k - 1) = smin;
+    const auto J = Sh::jacobian(matrix_with_singular_values(m, n, s, rng));
+    const VecXd sv = singular_values(J.template cast<double>());
+    const VecXd xd = gaussian_vector(m, rng);
+    inhand::IkReport<S> rf, re;
+    const VecXd qf = ik_solve<Sh>(fast, J, xd, Sh::no_limits(), &rf);
+    const VecXd qe = ik_solve<Sh>(exact, J, xd, Sh::no_limits(), &re);
+    const double ts = sv.minCoeff(), floor = 20.0 * eps<S>() * sv.maxCoeff() * sv.maxCoeff();
+    if (rf.min_singular_value_exact) {
+      ++computed;
+      ASSERT_EQ(rf.min_singular_value, re.min_singular_value) << "sample " << t;
+    } else {
+      ++certified;
+      ASSERT_EQ(k, 3) << "only 3-row Gram matrices are certified";
+      ASSERT_EQ(static_cast<double>(rf.min_singular_value), static_cast<double>(S(threshold)));
+      ASSERT_GE(ts * ts, threshold * threshold - floor) << "sample " << t;
+      ASSERT_FALSE(has(rf.status, IkStatus::damped)) << "sample " << t;
+    }
+    ASSERT_NEAR(static_cast<double>(rf.damping), static_cast<double>(re.damping),
+                1e-6 * threshold) << "sample " << t;
+    ASSERT_LE((qf - qe).norm(), tol * (1.0 + qe.norm())) << "sample " << t;
+  }
+  if (k == 3) EXPECT_GT(certified, count / 4);
+  EXPECT_GT(computed, 0);
+  inhand_test::record("certified_fraction", static_cast<double>(certified) / count);
 }
 
 // Limits: the whole vector is scaled by s = min(1, min_i limit_i / |qdot_i|) so it stays
@@ -446,7 +500,7 @@ TYPED_TEST(IkFingerTest, MinSingularValueMatchesJacobiSvd) {
   using Chain = TypeParam;
   using S = typename Chain::Scalar;
   const Chain chain = test_finger<Chain>();
-  FingerIk<Chain> ik(chain.dof());
+  FingerIk<Chain> ik(chain.dof(), exact_sigma_params<S>());
   Rng rng(210);
   double worst = 0.0;
   const int count = sweep_count();

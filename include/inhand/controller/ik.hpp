@@ -77,7 +77,11 @@ inline const char* to_string(IkStatus s) noexcept {
 template <typename Scalar>
 struct IkReport {
   IkStatus status = IkStatus::ok;
-  Scalar min_singular_value = Scalar(0);  ///< sigma_min of J (m/rad)
+  /// sigma_min of J (m/rad) when min_singular_value_exact; otherwise (IkParams::
+  /// exact_min_singular_value false and sigma_min certified above the threshold) the
+  /// threshold epsilon, a lower bound.
+  Scalar min_singular_value = Scalar(0);
+  bool min_singular_value_exact = true;
   Scalar damping = Scalar(0);             ///< lambda used (0 when not damped)
   Scalar limit_scale = Scalar(1);         ///< s applied for the velocity limits
   std::uint32_t held_joints = 0;          ///< bit i: joint i held at its position limit (i < 32)
@@ -104,6 +108,11 @@ struct IkParams {
   /// IK with this margin [rad] inside each limit; false: only the velocity limits act.
   bool joint_limits = true;
   Scalar joint_limit_margin = Scalar(0.01);
+  /// false: sigma_min of a 3-row Jacobian is computed only inside the damped region
+  /// (outside it a factorisation certifies sigma_min >= epsilon and the report gives
+  /// epsilon, min_singular_value_exact false); the command is the same (to rounding at
+  /// sigma_min = epsilon, where the damping is continuous and 0). true: always.
+  bool exact_min_singular_value = false;
   /// Field names relative to the controller Config ("ik.damping.max_damping").
   Validation validate() const noexcept {
     if (!is_finite(joint_limit_margin) || !(joint_limit_margin >= Scalar(0)))
@@ -171,13 +180,14 @@ class ContactIk {
   /// The (damped, per the schedule) pseudo-inverse J^+ that solve() applies.
   IkReport<Scalar> pseudo_inverse(const Jacobian& J, PseudoInverse& out) noexcept {
     IkReport<Scalar> report;
-    const auto f = dls_.factorize(J, params_.damping);
+    const auto f = dls_.factorize(J, params_.damping, params_.exact_min_singular_value);
     if (!f.valid) {
       out.setZero();
       report.status = IkStatus::invalid_input;
       return report;
     }
     report.min_singular_value = f.min_singular_value;
+    report.min_singular_value_exact = f.min_singular_value_exact;
     report.damping = f.damping;
     if (f.damped) report.status = IkStatus::damped;
     dls_.pseudo_inverse(J, out);
@@ -206,13 +216,14 @@ class ContactIk {
       report.status = IkStatus::invalid_input;
       return report;
     }
-    const auto f = dls_.factorize(J, params_.damping);
+    const auto f = dls_.factorize(J, params_.damping, params_.exact_min_singular_value);
     if (!f.valid) {
       theta_dot.setZero();
       report.status = IkStatus::invalid_input;
       return report;
     }
     report.min_singular_value = f.min_singular_value;
+    report.min_singular_value_exact = f.min_singular_value_exact;
     report.damping = f.damping;
     if (f.damped) report.status = report.status | IkStatus::damped;
     dls_.solve(J, x_dot, theta_dot);

@@ -41,10 +41,13 @@ class DampedLeastSquares {
   using Inverse = Eigen::Matrix<Scalar, N, M, Eigen::ColMajor, MaxN, M>;
 
   struct Result {
+    /// sigma_min (to the resolution stated above) when min_singular_value_exact;
+    /// otherwise the schedule's singular_threshold, a certified lower bound.
     Scalar min_singular_value = Scalar(0);
     Scalar damping = Scalar(0);  ///< lambda (not squared)
     bool damped = false;
     bool valid = false;  ///< false: non-finite matrix, solution set to zero
+    bool min_singular_value_exact = true;
   };
 
   explicit DampedLeastSquares(int n = (N == Eigen::Dynamic ? 0 : N)) { set_cols(n); }
@@ -60,7 +63,14 @@ class DampedLeastSquares {
   }
 
   /// Factorises J (Gram matrix, singular values, damping). Must precede solve().
-  Result factorize(const Matrix& J, const DampingSchedule<Scalar>& schedule) noexcept {
+  /// With `exact_min_singular_value` false and k = 3, sigma_min is computed only inside
+  /// the damped region: the LDL^T pivots of G - epsilon^2 I, all positive, certify
+  /// sigma_min >= epsilon (to the resolution above) and hence lambda = 0, at the cost
+  /// of one 3 x 3 factorisation instead of the eigenvalue computation; the result then
+  /// reports epsilon as a lower bound (min_singular_value_exact false). The damping,
+  /// and so the solution, are the same either way. k <= 2 is always exact (closed form).
+  Result factorize(const Matrix& J, const DampingSchedule<Scalar>& schedule,
+                   bool exact_min_singular_value = true) noexcept {
     Result r;
     factored_ = false;
     if (!all_finite(J) || k_ < 1) return r;
@@ -70,6 +80,14 @@ class DampedLeastSquares {
     } else {
       for (int a = 0; a < k_; ++a)
         for (int b = a; b < k_; ++b) gram_(a, b) = gram_(b, a) = J.col(a).dot(J.col(b));
+    }
+    if (!exact_min_singular_value && k_ == 3 &&
+        shifted_positive_definite(schedule.singular_threshold * schedule.singular_threshold)) {
+      r.min_singular_value = schedule.singular_threshold;
+      r.min_singular_value_exact = false;
+      factored_ = cholesky(Scalar(0));
+      r.valid = factored_;
+      return r;
     }
     Scalar mu_min = smallest_eigenvalue();
     if (!(mu_min > Scalar(0))) mu_min = Scalar(0);
@@ -197,6 +215,19 @@ class DampedLeastSquares {
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 3, 3>> qr;
     qr.compute(gram_, Eigen::EigenvaluesOnly);
     return qr.eigenvalues()(0);
+  }
+
+  /// True if the three LDL^T pivots of G - x I are positive (x below G's smallest
+  /// eigenvalue, to rounding): the pivots d0, d1 and d1 d2 (one division).
+  bool shifted_positive_definite(Scalar x) const noexcept {
+    const Scalar d0 = gram_(0, 0) - x;
+    if (!(d0 > Scalar(0))) return false;
+    const Scalar i0 = Scalar(1) / d0;
+    const Scalar l10 = gram_(1, 0) * i0, l20 = gram_(2, 0) * i0;
+    const Scalar d1 = gram_(1, 1) - x - l10 * gram_(1, 0);
+    if (!(d1 > Scalar(0))) return false;
+    const Scalar e21 = gram_(2, 1) - l20 * gram_(1, 0);
+    return (gram_(2, 2) - x - l20 * gram_(2, 0)) * d1 - e21 * e21 > Scalar(0);
   }
 
   /// tr((G - x I)^-1) from the LDL^T factorisation of G - x I; false if a pivot is not
