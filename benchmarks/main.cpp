@@ -84,7 +84,8 @@ int main(int argc, char** argv) {
   inhand_bench::register_finger_benchmarks();
   inhand_bench::register_controller_benchmarks();
   inhand_bench::register_kdl_benchmarks();
-  if (const char* name = flag_value(argc, argv, "inhand_count")) return count_ticks(name, argc, argv);
+  if (const char* name = flag_value(argc, argv, "inhand_count"))
+    return count_ticks(name, argc, argv);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -278,11 +278,13 @@ TYPED_TEST(IkShapeTest, CertifiedSigmaKeepsTheCommandAndBoundsSigma) {
       ASSERT_GE(ts * ts, threshold * threshold - floor) << "sample " << t;
       ASSERT_FALSE(has(rf.status, IkStatus::damped)) << "sample " << t;
     }
-    ASSERT_NEAR(static_cast<double>(rf.damping), static_cast<double>(re.damping),
-                1e-6 * threshold) << "sample " << t;
+    ASSERT_NEAR(static_cast<double>(rf.damping), static_cast<double>(re.damping), 1e-6 * threshold)
+        << "sample " << t;
     ASSERT_LE((qf - qe).norm(), tol * (1.0 + qe.norm())) << "sample " << t;
   }
-  if (k == 3) EXPECT_GT(certified, count / 4);
+  if (k == 3) {
+    EXPECT_GT(certified, count / 4);
+  }
   EXPECT_GT(computed, 0);
   inhand_test::record("certified_fraction", static_cast<double>(certified) / count);
 }

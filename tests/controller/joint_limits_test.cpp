@@ -341,8 +341,7 @@ TEST(CoupledJoints, ClosedLoopStopsAtTheLimitLessTheMargin) {
     // both towards their limits.
     const Eigen::Vector3d v = J.col(2) + J.col(3);
     FingerOut fo;
-    const auto w =
-        servo.command(memory, J, q, v, Eigen::Vector3d::UnitY(), nullptr, 200.0, dt, fo);
+    const auto w = servo.command(memory, J, q, v, Eigen::Vector3d::UnitY(), nullptr, 200.0, dt, fo);
     flagged = flagged || inhand::has(w, inhand::ControllerWarning::joint_position_limited);
     q += fo.joint_velocities * dt;
     ASSERT_LE(q(3), 0.6 - 0.02 + 1e-12) << "tick " << k;

@@ -87,9 +87,9 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   using Vec = typename Types::Vec;
   Vec force = Vec::Zero();
   if (force_active) force = -sc.forces.velocity(i) * sc.normals.col(i);
-  const ControllerWarning w =
-      sc.fingers[static_cast<std::size_t>(i)].layer3.command(m.layer3, m.jacobian, f.joint_positions, v, f.contact.normal,
-                       force_active ? &force : nullptr, t.config.max_joint_acceleration, t.dt, fo);
+  const ControllerWarning w = sc.fingers[static_cast<std::size_t>(i)].layer3.command(
+      m.layer3, m.jacobian, f.joint_positions, v, f.contact.normal, force_active ? &force : nullptr,
+      t.config.max_joint_acceleration, t.dt, fo);
   m.last_motion = fo.servo.motion;
   fo.stiffness_estimate = st.forces.stiffness_estimate()(i);
   fo.force_integral = st.forces.integral()(i);

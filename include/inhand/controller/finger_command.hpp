@@ -111,8 +111,8 @@ class FingerServo {
     if (max_step < std::numeric_limits<Scalar>::infinity()) {
       const Scalar largest = (fo.joint_velocities - memory.last_command).cwiseAbs().maxCoeff();
       if (largest > max_step) {
-        fo.joint_velocities =
-            memory.last_command + (max_step / largest) * (fo.joint_velocities - memory.last_command);
+        fo.joint_velocities = memory.last_command +
+                              (max_step / largest) * (fo.joint_velocities - memory.last_command);
         // A convex combination of two commands within the velocity limits: only rounding
         // can leave them; clamp it away (this only shrinks the step). The position box
         // may be left (last tick's command was for last tick's box): stop there.

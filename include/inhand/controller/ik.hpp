@@ -82,10 +82,10 @@ struct IkReport {
   /// threshold epsilon, a lower bound.
   Scalar min_singular_value = Scalar(0);
   bool min_singular_value_exact = true;
-  Scalar damping = Scalar(0);             ///< lambda used (0 when not damped)
-  Scalar limit_scale = Scalar(1);         ///< s applied for the velocity limits
-  std::uint32_t held_joints = 0;          ///< bit i: joint i held at its position limit (i < 32)
-  Scalar task_error = Scalar(0);          ///< |J theta_dot - x_dot| [m/s] of the returned command
+  Scalar damping = Scalar(0);      ///< lambda used (0 when not damped)
+  Scalar limit_scale = Scalar(1);  ///< s applied for the velocity limits
+  std::uint32_t held_joints = 0;   ///< bit i: joint i held at its position limit (i < 32)
+  Scalar task_error = Scalar(0);   ///< |J theta_dot - x_dot| [m/s] of the returned command
 };
 
 /// The joint-velocity box [rad/s] that keeps joint positions q inside
