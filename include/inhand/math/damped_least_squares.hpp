@@ -14,11 +14,11 @@
 // Fixed sizes never allocate; Eigen::Dynamic allocates only at construction.
 #pragma once
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
 #include "inhand/math/damping_schedule.hpp"
+#include "inhand/math/symmetric3.hpp"
 #include "inhand/math/types.hpp"
 
 namespace inhand {
@@ -82,7 +82,8 @@ class DampedLeastSquares {
         for (int b = a; b < k_; ++b) gram_(a, b) = gram_(b, a) = J.col(a).dot(J.col(b));
     }
     if (!exact_min_singular_value && k_ == 3 &&
-        shifted_positive_definite(schedule.singular_threshold * schedule.singular_threshold)) {
+        detail::shifted_positive_definite_3x3(
+            gram_, schedule.singular_threshold * schedule.singular_threshold)) {
       r.min_singular_value = schedule.singular_threshold;
       r.min_singular_value_exact = false;
       factored_ = cholesky(Scalar(0));
@@ -166,89 +167,7 @@ class DampedLeastSquares {
       const Scalar big = mean + half;
       return big > Scalar(0) ? (a * d - b * b) / big : Scalar(0);
     }
-    return smallest_eigenvalue_3x3();
-  }
-
-  /// Smallest eigenvalue of the full 3 x 3 Gram matrix, to |error| ~ eps |G| (the
-  /// resolution stated above, that of a backward-stable solver).
-  /// Newton's method on det(G - x I) from below, started just under the closed-form
-  /// (trigonometric) estimate: for x < mu_min, G - x I is positive definite, its LDL^T
-  /// factorisation is backward stable, and the Newton step 1 / tr((G - x I)^-1) never
-  /// overshoots mu_min, so every iterate is a lower bound. The closed form alone is
-  /// not accurate enough (up to ~1e7 eps |G| off for clustered eigenvalues), but its
-  /// error is small next to the gap to the second eigenvalue whenever that gap is not
-  /// tiny, and then one step reaches eps |G|. When the start is not below mu_min
-  /// (the closed form was further off than the margin allows) or the iteration does
-  /// not settle within four steps (clustered smallest eigenvalues), Eigen's iterative
-  /// (QR) solver decides. Fixed 3 x 3 storage: no allocation on any path.
-  Scalar smallest_eigenvalue_3x3() const noexcept {
-    const Scalar tr = gram_.trace();
-    if (!(tr > Scalar(0))) return Scalar(0);
-    const Scalar tiny = Eigen::NumTraits<Scalar>::epsilon() * tr;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 3, 3>> eig;
-    eig.computeDirect(gram_, Eigen::EigenvaluesOnly);
-    const Eigen::Matrix<Scalar, 3, 1> e = eig.eigenvalues();
-    // Start below the estimate by more than its error, which was measured to stay
-    // under ~30 eps tr sqrt(tr / gap) (gap: the estimated distance to the second
-    // eigenvalue); a start that is still too high is detected and handed over.
-    const Scalar gap = e(1) - e(0);
-    const Scalar margin = Scalar(64) * tiny * std::sqrt(tr / (gap > tiny ? gap : tiny));
-    const bool separated = gap > Scalar(8) * margin;  // e(1), e(2) then usable as bounds
-    Scalar x = e(0) - margin;
-    for (int it = 0; it < 4; ++it) {
-      Scalar inverse_trace;
-      if (!shifted_inverse_trace(x, inverse_trace)) {
-        // At a later step x has reached mu_min to within rounding.
-        if (it == 0) break;
-        return x > Scalar(0) ? x : Scalar(0);
-      }
-      const Scalar step = Scalar(1) / inverse_trace;
-      x += step;
-      if (step <= tiny) return x > Scalar(0) ? x : Scalar(0);
-      if (separated) {
-        // After a step of length s from below, mu_min - x ~ s^2 sum_{i>1} 1/(mu_i - mu_min).
-        const Scalar d2 = e(1) - margin - x, d3 = e(2) - margin - x;
-        if (d2 > Scalar(0) && Scalar(2) * step * step * (Scalar(1) / d2 + Scalar(1) / d3) <= tiny)
-          return x > Scalar(0) ? x : Scalar(0);
-      }
-    }
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 3, 3>> qr;
-    qr.compute(gram_, Eigen::EigenvaluesOnly);
-    return qr.eigenvalues()(0);
-  }
-
-  /// True if the three LDL^T pivots of G - x I are positive (x below G's smallest
-  /// eigenvalue, to rounding): the pivots d0, d1 and d1 d2 (one division).
-  bool shifted_positive_definite(Scalar x) const noexcept {
-    const Scalar d0 = gram_(0, 0) - x;
-    if (!(d0 > Scalar(0))) return false;
-    const Scalar i0 = Scalar(1) / d0;
-    const Scalar l10 = gram_(1, 0) * i0, l20 = gram_(2, 0) * i0;
-    const Scalar d1 = gram_(1, 1) - x - l10 * gram_(1, 0);
-    if (!(d1 > Scalar(0))) return false;
-    const Scalar e21 = gram_(2, 1) - l20 * gram_(1, 0);
-    return (gram_(2, 2) - x - l20 * gram_(2, 0)) * d1 - e21 * e21 > Scalar(0);
-  }
-
-  /// tr((G - x I)^-1) from the LDL^T factorisation of G - x I; false if a pivot is not
-  /// positive (x is not below the smallest eigenvalue, or G is not finite).
-  bool shifted_inverse_trace(Scalar x, Scalar& out) const noexcept {
-    const Scalar d0 = gram_(0, 0) - x;
-    if (!(d0 > Scalar(0))) return false;
-    const Scalar i0 = Scalar(1) / d0;
-    const Scalar l10 = gram_(1, 0) * i0, l20 = gram_(2, 0) * i0;
-    const Scalar d1 = gram_(1, 1) - x - l10 * gram_(1, 0);
-    if (!(d1 > Scalar(0))) return false;
-    const Scalar i1 = Scalar(1) / d1;
-    const Scalar e21 = gram_(2, 1) - l20 * gram_(1, 0);
-    const Scalar l21 = e21 * i1;
-    const Scalar d2 = gram_(2, 2) - x - l20 * gram_(2, 0) - l21 * e21;
-    if (!(d2 > Scalar(0))) return false;
-    const Scalar i2 = Scalar(1) / d2;
-    // (G - x I)^-1 = L^-T D^-1 L^-1 with L^-1 = [1 0 0; -l10 1 0; l10 l21 - l20, -l21, 1].
-    const Scalar m20 = l10 * l21 - l20;
-    out = i0 + (Scalar(1) + l10 * l10) * i1 + (Scalar(1) + l21 * l21 + m20 * m20) * i2;
-    return true;
+    return detail::smallest_eigenvalue_3x3(gram_);
   }
 
   /// Cholesky of the leading k x k block of G + l2 I into chol_ (lower). false if
