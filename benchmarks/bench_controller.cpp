@@ -20,6 +20,7 @@
 // scaling/<n>: n = 2..6 fingers of 4 DOF (the 4-joint thumb and n - 1 fingers), for
 //   the linear fit of the tick time against the finger count.
 #include "bench_support.hpp"
+#include "common/grasp_forces.hpp"
 
 namespace inhand_bench {
 namespace {
@@ -51,8 +52,8 @@ class ControllerFixture {
     if (!v.ok())
       throw std::invalid_argument(std::string("configure: ") + v.field + ": " + v.reason);
 
-    // Grasp: each finger touches at its nominal contact with the nominal force.
-    const S f0 = cfg.force_planner.nominal_force;
+    // Grasp: each finger touches at its nominal contact with its grasp force (the force
+    // planner's pattern over the targets' normals, controller/grasp.hpp).
     grasp_input_ = ctrl_.make_input();
     grasp_input_.object_pose = hand.object.template cast<S>();
     for (int i = 0; i < n; ++i) {
@@ -68,8 +69,11 @@ class ControllerFixture {
       f.contact.touching = true;
       f.contact.contact_point = targets_[k].contact_point;
       f.contact.normal = targets_[k].normal;
-      f.contact.normal_force = f0;
     }
+    const std::vector<S> f_grasp = inhand_test::grasp_forces<S, Dim>(cfg, targets_);
+    for (int i = 0; i < n; ++i)
+      grasp_input_.fingers[static_cast<std::size_t>(i)].contact.normal_force =
+          f_grasp[static_cast<std::size_t>(i)];
     trajectory_.reset(hand.object.template cast<S>());
     inhand::Twist<S, Dim> d = inhand::Twist<S, Dim>::Zero();
     d(0) = S(0.005);

@@ -77,6 +77,15 @@ inline PlanarController::Config box2d_controller_config() {
   c.force_layer.min_excitation *= s;
   c.force_layer.max_integral_velocity *= s;
   c.force_layer.slip_distance *= s;
+  c.force_layer.contact_damping /= s;  // N s/u
+  // No raised grip at release and a slow grip rise: the planar objects are light (the
+  // weight is carried by the table or, with gravity, well inside the friction cone), and
+  // the demo holds the measured forces within 0.1 N of their targets throughout.
+  c.force_layer.release_grip = 1.0;
+  // A slip raises the grip as a ramp (no step at its onset), at a rate the force loop
+  // follows within 0.1 N.
+  c.force_layer.friction_margin = 1.0;
+  c.force_layer.grip_rise_rate = 5.0;
   c.grasp.approach_speed = 0.03 * s;
   c.grasp.creep_speed = 0.005 * s;
   c.grasp.position_tolerance = 1e-3 * s;

@@ -210,8 +210,11 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     fl.friction_margin = f.number("friction_margin", fl.friction_margin, Range::closed(1.0, 100.0));
     fl.grip_decay_time =
         f.number("grip_decay_time", fl.grip_decay_time, Range::positive_up_to(1e6));
+    fl.release_grip = f.number("release_grip", fl.release_grip, Range::closed(1.0, 100.0));
     fl.rigid_tolerance =
         f.number("rigid_tolerance", fl.rigid_tolerance, Range::positive_up_to(1.0));
+    fl.contact_damping =
+        f.number("contact_damping", fl.contact_damping, Range::non_negative_up_to(1e6));
     f.finish();
   }
   {
@@ -243,6 +246,8 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     gp.alignment_tolerance =
         g.number("alignment_tolerance", gp.alignment_tolerance, Range::positive_up_to(kPi));
     gp.settle_time = g.number("settle_time", gp.settle_time, Range::non_negative_up_to(100.0));
+    gp.slide_force_fraction =
+        g.number("slide_force_fraction", gp.slide_force_fraction, Range::positive_up_to(1.0));
     g.finish();
   }
   r.finish();

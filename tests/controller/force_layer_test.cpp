@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <random>
@@ -60,6 +62,19 @@ Eigen::Matrix<double, 6, 1> resultant(const Grasp& g, const Layer::ForceVector& 
   return w;
 }
 
+/// A of grasp_map.hpp for the grasp: rows [n_i^T, ((p_i - p_o) x n_i)^T / L], p_o = 0.
+Eigen::Matrix<double, 4, 6> scaled_grasp_map(const Grasp& g) {
+  double sum = 0.0;
+  for (int i = 0; i < 4; ++i) sum += g.points.col(i).squaredNorm();
+  const double lever = std::sqrt(sum / 4.0);
+  Eigen::Matrix<double, 4, 6> a;
+  for (int i = 0; i < 4; ++i) {
+    a.row(i).head<3>() = g.normals.col(i).transpose();
+    a.row(i).tail<3>() = g.points.col(i).cross(g.normals.col(i)).transpose() / lever;
+  }
+  return a;
+}
+
 TEST(ForceLayer, CorrectionIsInternalForRandomGraspsAndForces) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0), pos(0.1, 3.0);
@@ -75,11 +90,22 @@ TEST(ForceLayer, CorrectionIsInternalForRandomGraspsAndForces) {
     Layer layer;
     Layer::Result r;
     layer.update(g.step(), r);
-    // The force loops' correction target - measured has no resultant (to the
-    // projection's regularisation), and the load is the measured resultant.
+    // The force loops' correction e = target - measured is x = s q - f_m projected on
+    // the internal space: along each right singular vector v_j of A (singular value
+    // sigma_j), A^T e keeps exactly eps / (sigma_j^2 + eps) of A^T x (grasp_map.hpp),
+    // so a direction with a resultant is never corrected in full. The load is the
+    // measured resultant.
     const Layer::ForceVector e = r.target - g.measured;
-    const double scale = (r.grip * g.pattern - g.measured).norm();
-    EXPECT_LT(resultant(g, e).head<3>().norm(), 2e-2 * scale) << k;
+    const Layer::ForceVector x = r.grip * g.pattern - g.measured;
+    const Eigen::Matrix<double, 4, 6> a = scaled_grasp_map(g);
+    const Eigen::JacobiSVD<Eigen::Matrix<double, 4, 6>> svd(a, Eigen::ComputeFullV);
+    const double eps = layer.params().rigid_tolerance;
+    const Eigen::Matrix<double, 6, 1> we = svd.matrixV().transpose() * (a.transpose() * e);
+    const Eigen::Matrix<double, 6, 1> wx = svd.matrixV().transpose() * (a.transpose() * x);
+    for (int j = 0; j < 6; ++j) {
+      const double sigma = j < 4 ? svd.singularValues()(j) : 0.0;
+      EXPECT_NEAR(we(j), eps / (sigma * sigma + eps) * wx(j), 1e-9 * (1.0 + x.norm())) << k;
+    }
     EXPECT_LT((r.load - resultant(g, g.measured)).norm(), 1e-9 * (1.0 + r.load.norm())) << k;
     EXPECT_TRUE(inhand::all_finite(r.velocity));
     EXPECT_GE(r.grip, 1.0);
@@ -94,7 +120,10 @@ TEST(ForceLayer, CollinearSqueezeIsInternalAndUnbalancedErrorIsIgnored) {
   // must not fight it; they only restore the squeeze.
   g.measured << 1, 1, 1, 3.3;
   layer.update(g.step(), r);
-  EXPECT_NEAR(resultant(g, r.target - g.measured).head<3>().norm(), 0.0, 1e-3);
+  // The force direction (sigma^2 = 4 for four unit normals) keeps eps / (4 + eps) of
+  // the unbalanced 0.3 N (grasp_map.hpp): the pose loop owns it.
+  const double eps = layer.params().rigid_tolerance;
+  EXPECT_LE(resultant(g, r.target - g.measured).head<3>().norm(), 0.3 * eps / (4.0 + eps) + 1e-9);
   EXPECT_NEAR(r.load(1), 0.3, 1e-12);
   // A squeeze deficit along the pattern is corrected: every finger presses harder.
   g.measured << 0.5, 0.5, 0.5, 1.5;
@@ -145,9 +174,93 @@ TEST(ForceLayer, LoopConvergesOverContactStiffnessWithSameGains) {
   }
 }
 
+/// One finger on a spring-damper contact, f = k x + c v, whose velocity command acts over
+/// the next tick with neither delay nor lag (the analytic plant with command_delay 0):
+/// the damper answers the command within the tick. Worst |f - f_d| over the last second.
+double damped_contact_loop(double k, double c, const inhand::ForceLayerParams<double>& p) {
+  Grasp g;
+  g.touching << 1, 0, 0, 0;
+  g.pattern << 1, 0, 0, 0;
+  g.measured.setZero();
+  Layer layer;
+  layer.set_params(p);
+  Layer::Result r;
+  const double dt = 1e-3;
+  double x = 0.0, worst = 0.0;
+  for (int t = 0; t < 3000; ++t) {
+    layer.update(g.step(dt, false), r);
+    const double v = r.velocity(0);
+    x += v * dt;
+    g.advance(0) = v * dt;
+    g.measured(0) = std::max(0.0, k * x + c * v);
+    if (t >= 2000) worst = std::max(worst, std::abs(g.measured(0) - 1.0));
+  }
+  return worst;
+}
+
+TEST(ForceLayer, DampedSoftContactDoesNotOscillate) {
+  // With the gain capped at 1 / (2 contact_damping) the loop through the damper has its
+  // root at -1/2 or nearer 0: it converges for every damping up to contact_damping.
+  const inhand::ForceLayerParams<double> p;
+  for (double k : {300.0, 500.0, 2000.0, 1e4, 5e4})
+    for (double c : {0.0, 5.0, p.contact_damping})
+      EXPECT_LT(damped_contact_loop(k, c, p), 0.02) << "k " << k << " c " << c;
+  // Without the cap, w_c c / k = 40 * 10 / 300 > 1: the loop oscillates tick against
+  // tick and the contact opens.
+  inhand::ForceLayerParams<double> uncapped;
+  uncapped.contact_damping = 0.0;
+  EXPECT_GT(damped_contact_loop(300.0, 10.0, uncapped), 0.5);
+}
+
+TEST(ForceLayer, SqueezeOffTheEquatorIsStillASqueeze) {
+  // The cylinder grasp with every contact 0.5 mm below the axis: the normals tilt by
+  // 1.4 degrees, all the same way, so the squeeze q = (1, 1, 1, 3) pushes the object
+  // up with 2.5 % of its magnitude. That resultant is within what the pose loop holds
+  // through friction; the force loops must still be able to squeeze.
+  Grasp g;
+  for (int i = 0; i < 4; ++i) {
+    g.points(2, i) = -0.0005;
+    g.normals.col(i) = Eigen::Vector3d(0.0, g.points(1, i), g.points(2, i)).normalized();
+  }
+  Layer layer;
+  Layer::Result r;
+  g.measured = 0.5 * g.pattern;  // half the squeeze
+  layer.update(g.step(1e-3, true), r);
+  const Layer::ForceVector e = r.target - g.measured;
+  const Layer::ForceVector x = r.grip * g.pattern - g.measured;
+  EXPECT_GT(e.dot(x), 0.9 * x.squaredNorm());
+  for (int i = 0; i < 4; ++i) EXPECT_GT(r.velocity(i), 0.0) << i;
+}
+
+TEST(ForceLayer, GripStartsAtReleaseGripAndDecays) {
+  Grasp g;
+  Layer layer;
+  Layer::Result r;
+  // Held (the grasp): the grip is the pattern's.
+  for (int t = 0; t < 100; ++t) layer.update(g.step(1e-3, false), r);
+  EXPECT_EQ(r.grip, 1.0);
+  // Released: release_grip at once (its first tick of decay already applied), then
+  // back to 1 with grip_decay_time.
+  const inhand::ForceLayerParams<double>& p = layer.params();
+  const double first = 1.0 + (p.release_grip - 1.0) * std::exp(-1e-3 / p.grip_decay_time);
+  layer.update(g.step(1e-3, true), r);
+  EXPECT_NEAR(r.grip, first, 1e-12);
+  EXPECT_TRUE(inhand::has(r.status, inhand::ForceLayerStatus::grip_raised));
+  const int ticks = static_cast<int>(p.grip_decay_time / 1e-3);
+  for (int t = 0; t < ticks; ++t) layer.update(g.step(1e-3, true), r);
+  EXPECT_NEAR(r.grip, 1.0 + (p.release_grip - 1.0) * std::exp(-1.0), 1e-3);
+  // Held again and released again: the raise repeats.
+  layer.update(g.step(1e-3, false), r);
+  layer.update(g.step(1e-3, true), r);
+  EXPECT_NEAR(r.grip, first, 1e-12);
+}
+
 TEST(ForceLayer, GripRisesOnSlipAndDecays) {
   Grasp g;
   Layer layer;
+  inhand::ForceLayerParams<double> params;
+  params.release_grip = 1.0;  // the slip's raise alone
+  layer.set_params(params);
   Layer::Result r;
   layer.update(g.step(), r);
   EXPECT_DOUBLE_EQ(r.grip, 1.0);
@@ -186,6 +299,12 @@ TEST(ForceLayer, ParamsNameTheField) {
   p = {};
   p.max_stiffness = 0.5 * p.min_stiffness;
   EXPECT_STREQ(p.validate().field, "force_layer.max_stiffness");
+  p = {};
+  p.release_grip = 0.9;
+  EXPECT_STREQ(p.validate().field, "force_layer.release_grip");
+  p = {};
+  p.contact_damping = -1.0;
+  EXPECT_STREQ(p.validate().field, "force_layer.contact_damping");
 }
 
 }  // namespace

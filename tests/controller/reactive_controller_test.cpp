@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "common/grasp_forces.hpp"
 #include "common/test_support.hpp"
 
 namespace {
@@ -312,7 +313,17 @@ Scene<Ctrl> planar_scene(
     s.targets[k].contact_point = sp.contact + expected_offset * sp.normal;
     s.targets[k].normal = sp.normal;
   }
+  // These tests hold the controller to the paper's planner (eq. 8's pattern, unscaled):
+  // no raised grip at release (force_layer_test.cpp covers it).
+  s.config.force_layer.release_grip = 1.0;
   return s;
+}
+
+/// The grasp forces of grasp.hpp for a scene (common/grasp_forces.hpp).
+template <typename Ctrl>
+Eigen::VectorXd grasp_forces(const Scene<Ctrl>& s) {
+  const std::vector<double> f = inhand_test::grasp_forces<double, Ctrl::Dim>(s.config, s.targets);
+  return Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
 }
 
 /// Spatial mixed-DOF hand: a 5-joint thumb (balancing) on the -x face, two 4-joint
@@ -350,6 +361,7 @@ Scene<MixedCtrl> mixed_scene() {
     s.targets[k].contact_point = sp.contact;
     s.targets[k].normal = sp.normal;
   }
+  s.config.force_layer.release_grip = 1.0;  // the paper's planner, unscaled (as above)
   return s;
 }
 
@@ -754,8 +766,14 @@ TEST(ReactiveControllerGrasp, FingersApproachTouchAndReachTheNominalForce) {
   PlanarCtrl::Output out = c.make_output();
   ASSERT_TRUE(c.start_grasp(s.targets).ok());
   const auto& g = s.config.grasp;
+  // The thumb balances the two fingers: 1 N, 1 N and (2 + rho) / (1 + rho) for it.
+  const Eigen::VectorXd f_grasp = grasp_forces(s);
+  const double rho = s.config.force_planner.regularisation;
+  ASSERT_NEAR(f_grasp(0), (2.0 + rho) / (1.0 + rho), 1e-12);
+  ASSERT_EQ(f_grasp(1), 1.0);
+  ASSERT_EQ(f_grasp(2), 1.0);
   std::vector<double> prev_dist(3, kInf);
-  std::vector<bool> touched(3, false), checked_first_press(3, false);
+  std::vector<bool> touched(3, false), checked_first_press(3, false), pressing_still(3, false);
   double worst_v = 0.0, worst_ik = 0.0, worst_tangential = 0.0;
   int ticks = -1;
   for (int k = 0; k < 4000 && ticks < 0; ++k) {
@@ -787,16 +805,26 @@ TEST(ReactiveControllerGrasp, FingersApproachTouchAndReachTheNominalForce) {
       } else {
         touched[j] = true;
         ASSERT_EQ(fo.state, FingerState::pressing);
-        EXPECT_EQ(fo.desired_normal_force, s.config.force_planner.nominal_force);
+        // It slides to its target with slide_force_fraction of its grasp force; once
+        // placed it presses with the full grasp force and no longer slides, for good.
+        const double slide = g.slide_force_fraction * f_grasp(i);
+        if (std::abs(fo.desired_normal_force - f_grasp(i)) < 1e-12) pressing_still[j] = true;
+        if (pressing_still[j]) {
+          EXPECT_NEAR(fo.desired_normal_force, f_grasp(i), 1e-12)
+              << "finger " << i << " tick " << k;
+          EXPECT_TRUE(fo.desired_contact_velocity.isZero(0.0)) << "finger " << i;
+        } else {
+          EXPECT_NEAR(fo.desired_normal_force, slide, 1e-12) << "finger " << i << " tick " << k;
+        }
         // While pressing the motion part is tangential: motion along the normal
         // comes from the force servo alone.
         worst_tangential =
             std::max(worst_tangential, std::abs(fo.desired_contact_velocity.dot(sensed.normal)));
         if (!checked_first_press[j]) {
-          // First touch: the force is below 1 N, so the force part pushes INTO the
-          // object, along -n (servo.hpp's sign convention).
+          // First touch: the force is below its grasp force, so the force part pushes
+          // INTO the object, along -n (servo.hpp's sign convention).
           checked_first_press[j] = true;
-          EXPECT_LT(sensed.force, 1.0);
+          EXPECT_LT(sensed.force, fo.desired_normal_force);
           EXPECT_LT(fo.servo.force.dot(sensed.normal), 0.0) << "finger " << i;
         }
       }
@@ -817,11 +845,13 @@ TEST(ReactiveControllerGrasp, FingersApproachTouchAndReachTheNominalForce) {
   EXPECT_LT(worst_v, 1e-15);
   EXPECT_LT(worst_ik, 1e-6);
   EXPECT_LT(worst_tangential, 1e-15);
-  // Every finger presses with the nominal force within the tolerance.
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(pressing_still[static_cast<std::size_t>(i)]) << i;
+  // Every finger presses with its grasp force within the tolerance.
   s.plant.sense();
   for (int i = 0; i < 3; ++i) {
     EXPECT_TRUE(s.plant.sensed[static_cast<std::size_t>(i)].touching);
-    EXPECT_NEAR(in.fingers[static_cast<std::size_t>(i)].contact.normal_force, 1.0, 0.1)
+    EXPECT_NEAR(in.fingers[static_cast<std::size_t>(i)].contact.normal_force, f_grasp(i),
+                g.force_tolerance * f_grasp(i))
         << "finger " << i;
   }
   // The box was frozen.
@@ -841,8 +871,10 @@ TEST(ReactiveControllerGrasp, FindsASurfaceDeeperThanExpected) {
   PlanarCtrl::Output out;
   configure_and_grasp(c, s, in, out);
   s.plant.sense();
+  const Eigen::VectorXd f_grasp = grasp_forces(s);
   for (int i = 0; i < 3; ++i)
-    EXPECT_NEAR(s.plant.sensed[static_cast<std::size_t>(i)].force, 1.0, 0.1);
+    EXPECT_NEAR(s.plant.sensed[static_cast<std::size_t>(i)].force, f_grasp(i),
+                s.config.grasp.force_tolerance * f_grasp(i));
   // And when the object is larger than expected, contact simply comes earlier.
   Scene<PlanarCtrl> big = planar_scene<PlanarCtrl>(-0.003);
   PlanarCtrl d;
@@ -929,7 +961,7 @@ TEST(ReactiveControllerManipulation, FollowsEq2KeepsContactAndBalancesTheThumb) 
         ++ik_checked;
       }
       // Force tracking while the object moves (after the initial hold, in which the
-      // thumb's plan steps from the grasp's 1 N to the balancing 2 N).
+      // force loops settle after the release).
       if (out.manipulation_time > 0.2)
         worst_force =
             std::max(worst_force, std::abs(fin.contact.normal_force - fo.desired_normal_force));
@@ -1300,8 +1332,10 @@ TEST(ReactiveControllerMixedDof, ThumbWithFiveJointsAndFourJointFingers) {
   const int grasp_ticks = run_grasp(c, s.plant, in, out);
   ASSERT_GT(grasp_ticks, 0);
   s.plant.sense();
+  const Eigen::VectorXd f_grasp = grasp_forces(s);  // the thumb 2 N against two of 1 N
   for (int i = 0; i < 3; ++i)
-    EXPECT_NEAR(s.plant.sensed[static_cast<std::size_t>(i)].force, 1.0, 0.1);
+    EXPECT_NEAR(s.plant.sensed[static_cast<std::size_t>(i)].force, f_grasp(i),
+                s.config.grasp.force_tolerance * f_grasp(i));
 
   using Seg = inhand::TrajectorySegment<double, 3>;
   inhand::ObjectTrajectory<double, 3> task;

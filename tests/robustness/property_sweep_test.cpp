@@ -118,6 +118,7 @@ void randomise_config(typename Ctrl::Config& c, Rng& rng, bool settle_zero) {
   g.position_tolerance = uniform<S>(rng, S(2e-4), S(5e-3));
   g.force_tolerance = uniform<S>(rng, S(0.02), S(0.5));
   g.settle_time = settle_zero ? S(0) : uniform<S>(rng, S(0), S(0.2));
+  g.slide_force_fraction = uniform<S>(rng, S(0.05), S(1));
   for (auto& f : c.fingers)
     f.kinematics = uniform<double>(rng, 0, 1) < 0.3 ? Ctrl::KinematicsSource::external
                                                     : Ctrl::KinematicsSource::chain;

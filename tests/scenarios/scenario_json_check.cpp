@@ -176,7 +176,7 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
                         "filter_time": 0.03},
       "grasp": {"approach_gain": 3, "approach_speed": 0.02, "creep_speed": 0.004, "tangential_gain": 4,
                 "force_tolerance": 0.15, "position_tolerance": 2e-3, "alignment_speed": 0.05,
-                "alignment_tolerance": 0.1, "settle_time": 0.2}})");
+                "alignment_tolerance": 0.1, "settle_time": 0.2, "slide_force_fraction": 0.5}})");
   j["tolerances"] = ex::parse_json_text(
       R"({"drop_distance": 0.03, "settle_position_tolerance": 1e-3, "settle_orientation_tolerance": 0.02})");
   j["faults"] = ex::parse_json_text(R"([
@@ -277,6 +277,7 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   EXPECT_EQ(c.grasp.alignment_speed, 0.05);
   EXPECT_EQ(c.grasp.alignment_tolerance, 0.1);
   EXPECT_EQ(c.grasp.settle_time, 0.2);
+  EXPECT_EQ(c.grasp.slide_force_fraction, 0.5);
   EXPECT_EQ(s.tolerances.drop_distance, 0.03);
   EXPECT_EQ(s.tolerances.settle_position_tolerance, 1e-3);
   EXPECT_EQ(s.tolerances.settle_orientation_tolerance, 0.02);
@@ -448,13 +449,13 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
                              fa.max_stiffness,  fa.stiffness_window,      fa.min_excitation,
                              fa.min_fit,        fa.max_integral_velocity, fa.slip_distance,
                              fa.grip_rise_rate, fa.friction_margin,       fa.grip_decay_time,
-                             fa.rigid_tolerance};
+                             fa.release_grip,   fa.rigid_tolerance,       fa.contact_damping};
     const double want_fl[] = {fb.bandwidth,      fb.integral_corner,       fb.min_stiffness,
                               fb.max_stiffness,  fb.stiffness_window,      fb.min_excitation,
                               fb.min_fit,        fb.max_integral_velocity, fb.slip_distance,
                               fb.grip_rise_rate, fb.friction_margin,       fb.grip_decay_time,
-                              fb.rigid_tolerance};
-    for (std::size_t k = 0; k < 13; ++k)
+                              fb.release_grip,   fb.rigid_tolerance,       fb.contact_damping};
+    for (std::size_t k = 0; k < 15; ++k)
       EXPECT_EQ(got_fl[k], want_fl[k]) << "force_layer field " << k;
   }
   EXPECT_EQ(c.outlier_gates.max_object_speed, dc.outlier_gates.max_object_speed);
@@ -495,6 +496,7 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
   EXPECT_EQ(c.grasp.alignment_speed, dc.grasp.alignment_speed);
   EXPECT_EQ(c.grasp.alignment_tolerance, dc.grasp.alignment_tolerance);
   EXPECT_EQ(c.grasp.settle_time, dc.grasp.settle_time);
+  EXPECT_EQ(c.grasp.slide_force_fraction, dc.grasp.slide_force_fraction);
   const ip::MetricsTolerances dt{};
   EXPECT_EQ(got.tolerances.drop_distance, dt.drop_distance);
   EXPECT_EQ(got.tolerances.settle_position_tolerance, dt.settle_position_tolerance);

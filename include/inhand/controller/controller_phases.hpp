@@ -125,9 +125,21 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
                              TickScratch<Types>& sc, typename Types::Output& out) noexcept {
   using Scalar = typename Types::ScalarType;
   const GraspParams<Scalar>& g = t.config.grasp;
-  const Scalar f0 = t.config.force_planner.nominal_force;
   ControllerWarning w = out.warnings;
-  sc.pattern.setConstant(f0);
+  // The grasp presses with the planner's pattern over the targets' expected normals
+  // (every finger counted as touching): the forces that leave the object in
+  // equilibrium once it is released, if the contacts are where they were asked for.
+  // The expected normals are fixed, so the pattern is too (no sensor noise in it).
+  for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {
+    sc.touching(i) = 1;
+    sc.normals.col(i) = st.fingers[static_cast<std::size_t>(i)].target.normal;
+  }
+  typename Types::Vec residual;
+  st.planner.plan(sc.touching, sc.normals, t.dt, sc.pattern, residual);
+  // A finger not yet placed slides to its target with a fraction of its grasp force.
+  for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i)
+    if (!st.fingers[static_cast<std::size_t>(i)].settle.placed)
+      sc.pattern(i) *= g.slide_force_fraction;
   detail::run_force_layer(t, false, st, sc);
   bool all_placed = true;
   for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {
@@ -141,11 +153,21 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
       detail::remember_contact(m, f.contact, t.object);
       const PressStep<Scalar, Types::kDim> press =
           press_step(g, m.target, f.contact.contact_point, f.contact.normal, t.dt, m.settle);
-      w |= detail::command_finger(t, i, points, points.centre(), press.velocity, true, st, sc, fo);
-      all_placed = all_placed && std::abs(m.force_gate.force() - f0) <= g.force_tolerance * f0 &&
-                   press.placed;
+      // Once placed, the finger presses still: sliding on under the full force would load
+      // the object tangentially again (grasp.hpp).
+      const typename Types::Vec v =
+          m.settle.placed ? typename Types::Vec(Types::Vec::Zero()) : press.velocity;
+      w |= detail::command_finger(t, i, points, points.centre(), v, true, st, sc, fo);
+      // Complete with the full grasp force f_g. A placed finger stays placed: it no
+      // longer moves along the object, so its contact no longer changes (sensor noise
+      // alone would otherwise un-place it).
+      const Scalar fd = m.settle.placed ? sc.pattern(i) : sc.pattern(i) / g.slide_force_fraction;
+      m.settle.placed = m.settle.placed || press.placed;
+      all_placed = all_placed && m.settle.placed &&
+                   std::abs(m.force_gate.force() - fd) <= g.force_tolerance * fd;
     } else {
       if (m.state == FingerState::pressing) m.layer3.servo.reset_force();
+      m.settle.start();
       m.state = FingerState::approaching;
       const typename Types::Vec p_v = points.virtual_point(m.target.normal);
       const typename Types::Vec v =

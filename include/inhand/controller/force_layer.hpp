@@ -32,9 +32,19 @@
 // z^2 - z + a = 0, a = rho w_c T, is stable for a < 1: at the default w_c = 40 rad/s
 // and T = 1 ms a stiffness under-estimated by up to rho = 25 times is still stable
 // (docs/force_layer.md gives the phase margin with actuator lag).
+// The contact's damping c [N s/m] answers a commanded velocity within the tick: with
+// no actuator lag the loop through it is f_{n+1} = ... - c kp f_n, kp = w_c / k_i, a
+// root near -c kp, unstable (a period-2 oscillation) once c kp >= 1 -- at 500 N/m and
+// 10 N s/m, c kp = 0.8 with the true stiffness, 1.1 with an estimate 27 % low. So kp
+// is capped at 1 / (2 c) (contact_damping; the root at -1/2 or nearer 0): on a soft,
+// damped contact the loop crosses over below w_c (at k / (2 c)), never unstable.
 //
 // Grip that follows the load. s is the largest of
 //   1                 the nominal grip (the planner's pattern);
+//   s_release         release_grip on the first tick the object is free, decaying to 1
+//                     like s_slip: the load the grasp could not feel (the object was
+//                     held) arrives at release as a step, faster than a slip can be
+//                     felt and answered, so the grip meets it raised;
 //   s_min_force       the least s for which every target force s (P_int q)_i +
 //                     (P_r f_m)_i is at least min_force: a normal load taken from a
 //                     finger is given back by squeezing harder;
@@ -130,6 +140,7 @@ class ForceLayer {
     was_touching_.setZero();
     grip_slip_ = Scalar(1);
     was_slipping_ = false;
+    was_free_ = false;
   }
 
   const ForceVector& stiffness_estimate() const noexcept { return stiffness_.estimate(); }
@@ -197,7 +208,8 @@ class ForceLayer {
     bool limited = false;
     for (int i = 0; i < n_; ++i) {
       if (!touching(i)) continue;
-      const Scalar kp = p.bandwidth / stiffness_.estimate()(i);
+      Scalar kp = p.bandwidth / stiffness_.estimate()(i);
+      if (p.contact_damping > Scalar(0)) kp = std::min(kp, Scalar(0.5) / p.contact_damping);
       const Scalar zmax = p.integral_corner > Scalar(0)
                               ? p.max_integral_velocity / (kp * p.integral_corner)
                               : Scalar(0);
@@ -217,6 +229,7 @@ class ForceLayer {
     Scalar s_lo = Scalar(1), s_hi = std::numeric_limits<Scalar>::infinity();
     bool infeasible = false;
     if (in.object_free) {
+      if (!was_free_) grip_slip_ = std::max(grip_slip_, p.release_grip);
       for (int i = 0; i < n_; ++i) {
         if (!(*in.touching)(i)) continue;
         const Scalar q = q_int_(i), r = r_load_(i);
@@ -238,6 +251,7 @@ class ForceLayer {
       grip_slip_ = Scalar(1);
       was_slipping_ = false;
     }
+    was_free_ = in.object_free;
     Scalar s = std::max(s_lo, grip_slip_);
     if (s > s_hi) {
       s = std::max(Scalar(1), s_hi);
@@ -262,6 +276,7 @@ class ForceLayer {
   Scalar grip_ = Scalar(1);
   Scalar grip_slip_ = Scalar(1);
   bool was_slipping_ = false;
+  bool was_free_ = false;
 };
 
 }  // namespace inhand

@@ -23,10 +23,12 @@ struct ForceLayerParams {
   Scalar min_fit = Scalar(0.9);                ///< r^2 of the fit needed to update, in (0, 1]
   Scalar max_integral_velocity = Scalar(0.1);  ///< [m/s], bound on (w_c / k) w_i z
   Scalar slip_distance = Scalar(3e-4);         ///< [m], see the file comment
-  Scalar grip_rise_rate = Scalar(5);           ///< [1/s], rise of s while slipping
+  Scalar grip_rise_rate = Scalar(50);          ///< [1/s], rise of s while slipping
   Scalar friction_margin = Scalar(1.5);        ///< >= 1, grip after a slip onset / grip at onset
   Scalar grip_decay_time = Scalar(20);         ///< [s], s_slip back to 1 once the slip stops
-  Scalar rigid_tolerance = Scalar(1e-3);       ///< eps, dimensionless (see the file comment)
+  Scalar release_grip = Scalar(2);             ///< >= 1, s when the object is released (decays)
+  Scalar rigid_tolerance = Scalar(0.1);        ///< eps, dimensionless (see the file comment)
+  Scalar contact_damping = Scalar(10);         ///< c [N s/m], largest expected; 0: no gain cap
 
   Validation validate() const noexcept {
     const Scalar inf = std::numeric_limits<Scalar>::infinity();
@@ -48,7 +50,9 @@ struct ForceLayerParams {
         {"force_layer.grip_rise_rate", grip_rise_rate, Scalar(0), inf, false},
         {"force_layer.friction_margin", friction_margin, Scalar(1), inf, false},
         {"force_layer.grip_decay_time", grip_decay_time, Scalar(0), inf, true},
+        {"force_layer.release_grip", release_grip, Scalar(1), inf, false},
         {"force_layer.rigid_tolerance", rigid_tolerance, Scalar(0), inf, true},
+        {"force_layer.contact_damping", contact_damping, Scalar(0), inf, false},
     };
     for (const Field& f : fields) {
       const bool ok =

@@ -14,6 +14,12 @@
 //   internal : null(A^T)  -- squeezing that leaves the object in equilibrium
 //   P_int = I - A (A^T A + eps I)^-1 A^T   (eps > 0 keeps it defined when A is
 //                                           rank-deficient: fewer than W contacts)
+// A direction of A^T with singular value sigma counts as rigid by the fraction
+// sigma^2 / (sigma^2 + eps): one whose wrench is small (sigma << sqrt(eps): nearly
+// collinear normals whose tilt, or lever, is a few per cent) stays internal, so that
+// squeezing a grasp whose contacts lie slightly off the object's equator is still a
+// squeeze. The projection never holds a rigid component: it shrinks it by
+// eps / (sigma^2 + eps) < 1 every tick.
 // build() factorises A^T A + eps I once per tick; project_internal() then costs two
 // small products and a W x W solve. noexcept; fixed finger counts never allocate.
 #pragma once

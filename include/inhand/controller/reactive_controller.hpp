@@ -36,7 +36,7 @@
 // resolution for ~270 years); dt is computed in double and then converted to Scalar.
 //
 // Phases: configure() -> start_grasp(targets) -> update() until `grasped` (every finger
-// presses with the nominal force) -> release the object, start_manipulation(trajectory).
+// presses with its grasp force, grasp.hpp) -> release the object, start_manipulation().
 // Mixed-DOF hands: use Dof = inhand::Dynamic with MaxDof the largest finger (e.g. a
 // 5-joint thumb and 4-joint fingers: Dof = Dynamic, MaxDof = 5): still no allocation.
 #pragma once
