@@ -4,13 +4,12 @@
 //
 // Set-up drives each controller the way an application does: configure(), then
 // start_grasp() towards each finger's nominal contact, fed with the finger touching
-// there at the nominal force until update() reports `grasped`, then
-// start_manipulation() with a 5 mm reciprocating translation. It then checks that
-// every precomputed input gives ControllerStatus::ok with every finger in_contact, so
-// the timed ticks run the manipulation path. The timed tick rotates through
-// kSamples sensed states (object pose, joint angles, contacts, forces), advancing the
-// clock by kDt. Every 2^16 ticks the controller is re-grasped with the timer paused,
-// which keeps a float clock far from its resolution limit.
+// there with its grasp force (ReactiveController::grasp_force) until update() reports `grasped`,
+// then start_manipulation() with a 5 mm reciprocating translation. It then checks that every
+// precomputed input gives ControllerStatus::ok with every finger in_contact, so the timed ticks run
+// the manipulation path. The timed tick rotates through kSamples sensed states (object pose, joint
+// angles, contacts, forces), advancing the clock by kDt. Every 2^16 ticks the controller is
+// re-grasped with the timer paused, which keeps a float clock far from its resolution limit.
 //
 // controller/<hand>: planar2x2, planar2x3 (two opposing planar fingers), spatial3x3
 //   (the three-finger preset), allegro4 (4 fingers x 4 DOF), shadow4 (the Shadow-like
@@ -20,7 +19,6 @@
 // scaling/<n>: n = 2..6 fingers of 4 DOF (the 4-joint thumb and n - 1 fingers), for
 //   the linear fit of the tick time against the finger count.
 #include "bench_support.hpp"
-#include "common/grasp_forces.hpp"
 
 namespace inhand_bench {
 namespace {
@@ -70,10 +68,9 @@ class ControllerFixture {
       f.contact.contact_point = targets_[k].contact_point;
       f.contact.normal = targets_[k].normal;
     }
-    const std::vector<S> f_grasp = inhand_test::grasp_forces<S, Dim>(cfg, targets_);
+    if (!ctrl_.start_grasp(targets_).ok()) throw std::runtime_error("start_grasp");
     for (int i = 0; i < n; ++i)
-      grasp_input_.fingers[static_cast<std::size_t>(i)].contact.normal_force =
-          f_grasp[static_cast<std::size_t>(i)];
+      grasp_input_.fingers[static_cast<std::size_t>(i)].contact.normal_force = ctrl_.grasp_force(i);
     trajectory_.reset(hand.object.template cast<S>());
     inhand::Twist<S, Dim> d = inhand::Twist<S, Dim>::Zero();
     d(0) = S(0.005);

@@ -34,7 +34,6 @@
 #include <utility>
 #include <vector>
 
-#include "common/grasp_forces.hpp"
 #include "inhand/controller/reactive_controller.hpp"
 #include "inhand/sim/presets.hpp"
 
@@ -251,10 +250,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (header & 1u) {
       setup.nominal(0, 7u, in);
       // Every finger presses with its grasp force (controller/grasp.hpp).
-      const std::vector<double> f_grasp = inhand_test::grasp_forces<double, 3>(cfg, setup.targets);
       for (int i = 0; i < kFingers; ++i) {
         auto& f = in.fingers[static_cast<std::size_t>(i)];
-        f.contact.normal_force = f_grasp[static_cast<std::size_t>(i)];
+        f.contact.normal_force = ctl.grasp_force(i);
         f.joint_positions = setup.q0[static_cast<std::size_t>(i)];
       }
       in.object_pose = setup.object;

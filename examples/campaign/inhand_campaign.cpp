@@ -9,7 +9,9 @@
 // A case succeeds when the grasp completes, the object is not dropped, no contact is
 // lost, and the task stage meets the campaign bounds (see kBounds).
 // Output: one line per failing case (with its seed) and a summary table; exit code 1
-// when the success rate is below --min-success.
+// when the success rate is below --min-success. `--first-seed S --count 1 --trace F.csv`
+// writes case S's per-tick trace (the columns of inhand_scenario's trace.csv), to see
+// why a seed fails.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
@@ -18,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "common/trace_csv.hpp"
 #include "inhand/sim/scenario.hpp"
 
 namespace {
@@ -26,6 +29,7 @@ using inhand::Pose;
 using inhand::TrajectorySegment;
 using inhand::Twist;
 namespace ip = inhand::plant;
+namespace ex = inhand::examples;
 
 /// Documented ranges of the campaign (units: m, kg, rad).
 struct Ranges {
@@ -183,11 +187,22 @@ struct Outcome {
   double rms_p = 0, fin_p = 0, rms_r = 0, fin_r = 0;
 };
 
-Outcome evaluate(const Case& c) {
+/// Runs a case; with `trace`, writes its per-tick trace there (committed at the end).
+Outcome evaluate(const Case& c, const std::string& trace = {}) {
   Outcome o;
   ip::ScenarioResult r;
   try {
-    r = ip::ScenarioRunner{}.run(c.spec);
+    if (trace.empty()) {
+      r = ip::ScenarioRunner{}.run(c.spec);
+    } else {
+      ex::TraceCsvWriter<3> writer(trace, c.spec.hand.finger_names, c.spec.object.pose.rotation);
+      ex::TraceRow<3> row;
+      r = ip::ScenarioRunner{}.run(c.spec, [&](const ip::TickRecord& rec) {
+        ex::fill_trace_row<3>(rec, c.spec.stages[static_cast<std::size_t>(rec.stage)].name, row);
+        writer.write(row);
+      });
+      ex::commit_together({&writer.file()});
+    }
   } catch (const std::exception& e) {
     o.why = std::string("invalid case: ") + e.what();
     return o;
@@ -239,7 +254,13 @@ int main(int argc, char** argv) {
       "--wide", wide,
       "widened ranges: mass 0.02-0.4 kg, friction 0.4-1.2, gravity along +-X/Y/Z, stiffness "
       "500 N/m-50 kN/m, lag 0-10 ms, delay 0-1 tick, +-0.1 N bias on one finger");
+  std::string trace;
+  app.add_option("--trace", trace, "per-tick trace CSV of the one case run (needs --count 1)");
   CLI11_PARSE(app, argc, argv);
+  if (!trace.empty() && count != 1) {
+    std::fprintf(stderr, "error: --trace needs --count 1\n");
+    return 2;
+  }
 
   const auto t0 = std::chrono::steady_clock::now();
   long ok = 0;
@@ -248,7 +269,7 @@ int main(int argc, char** argv) {
   for (long k = 0; k < count; ++k) {
     const std::uint64_t seed = first + static_cast<std::uint64_t>(k);
     const Case c = make_case(seed, wide);
-    const Outcome o = evaluate(c);
+    const Outcome o = evaluate(c, trace);
     if (o.success) {
       ++ok;
       worst_rms_p = std::max(worst_rms_p, o.rms_p);

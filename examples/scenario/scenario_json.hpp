@@ -215,6 +215,7 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
         f.number("rigid_tolerance", fl.rigid_tolerance, Range::positive_up_to(1.0));
     fl.contact_damping =
         f.number("contact_damping", fl.contact_damping, Range::non_negative_up_to(1e6));
+    fl.capacity_time = f.number("capacity_time", fl.capacity_time, Range::non_negative_up_to(10.0));
     f.finish();
   }
   {

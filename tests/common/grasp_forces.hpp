@@ -2,9 +2,11 @@
 // for the tests that check them: the force planner's pattern over the grasp targets'
 // expected normals, every finger counted as touching, from a replica planner of the
 // configuration (preset fingers nominal_force, balancing fingers what cancels the
-// resultant). Units: N.
+// resultant), scaled by force_layer.release_grip, or less so that none exceeds max_force.
+// Units: N.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -29,7 +31,12 @@ std::vector<Scalar> grasp_forces(const Config& config, const Targets& targets) {
   Eigen::Matrix<Scalar, Eigen::Dynamic, 1> f(n);
   inhand::Vector<Scalar, Dim> residual;
   planner.plan(touching, normals, Scalar(1e-3), f, residual);
-  return std::vector<Scalar>(f.data(), f.data() + n);
+  // One scale for every finger: release_grip, or the largest that keeps all within max_force.
+  const Scalar scale = std::min(static_cast<Scalar>(config.force_layer.release_grip),
+                                config.force_planner.max_force / f.maxCoeff());
+  std::vector<Scalar> out(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) out[static_cast<std::size_t>(i)] = scale * f(i);
+  return out;
 }
 
 }  // namespace inhand_test

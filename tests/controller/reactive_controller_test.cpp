@@ -862,6 +862,30 @@ TEST(ReactiveControllerGrasp, FingersApproachTouchAndReachTheNominalForce) {
   record("ik_relative_residual", worst_ik);
 }
 
+TEST(ReactiveControllerGrasp, GraspForcesAreOneScaleOfThePatternWithinMaxForce) {
+  // The thumb's pattern is 2 N against two fingers of 1 N. release_grip 3 would ask the
+  // thumb for 6 N; with max_force 5 every finger is scaled by 2.5 instead, so the grasp
+  // forces stay balanced (a per-finger clip to 5 N would leave 1 N pushing the object).
+  Scene<MixedCtrl> s = mixed_scene();
+  s.config.force_layer.release_grip = 3.0;
+  s.config.force_planner.max_force = 5.0;
+  MixedCtrl c;
+  ASSERT_TRUE(c.configure(s.config).ok());
+  EXPECT_EQ(c.grasp_force(0), 0.0);  // before start_grasp
+  ASSERT_TRUE(c.start_grasp(s.targets).ok());
+  const Eigen::VectorXd f = grasp_forces(s);  // the replica planner, scaled
+  Eigen::Vector3d resultant = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(c.grasp_force(i), f(i), 1e-12) << i;
+    EXPECT_LE(c.grasp_force(i), 5.0 + 1e-12) << i;
+    resultant += c.grasp_force(i) * s.targets[static_cast<std::size_t>(i)].normal.normalized();
+  }
+  EXPECT_NEAR(c.grasp_force(0), 5.0, 1e-3);
+  EXPECT_LT(resultant.norm(), 0.01);
+  EXPECT_EQ(c.grasp_force(3), 0.0);  // out of range
+  EXPECT_EQ(c.grasp_force(-1), 0.0);
+}
+
 TEST(ReactiveControllerGrasp, FindsASurfaceDeeperThanExpected) {
   // The targets expect the faces 3 mm further out than they are: after reaching the
   // expected points the fingers must keep creeping until they touch.

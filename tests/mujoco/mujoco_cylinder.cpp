@@ -30,10 +30,11 @@ Spec cylinder_experiment(ip::PaperTask task, int axis) {
   s.tolerances = paper.tolerances;
   // INHAND_MUJOCO_KP=<1/s>: the servo's position gain (MujocoSetup::position_gain).
   if (const char* kp = std::getenv("INHAND_MUJOCO_KP")) s.position_gain = std::atof(kp);
-  // Not the default release grip (2): on this three-finger hand the squeeze stepped to
-  // twice the pattern at release rolls the cylinder out during the hold (2.3 cm, 0.48
-  // rad, translation along X); 1.5 holds it, 1.7 does not (docs/mujoco.md).
-  s.controller.force_layer.release_grip = 1.5;
+  // Not the default release grip (2): on this three-finger hand the grasp pressing with
+  // twice its pattern turns the cylinder at release (hold RMS 0.39 rad, the manipulation
+  // cannot start); 1.5 passes the translation along X but leaves 12-16 mrad RMS in two
+  // of the others; 1 passes all six with at most 2.1 mrad (docs/mujoco.md).
+  s.controller.force_layer.release_grip = 1.0;
   return s;
 }
 
@@ -109,11 +110,10 @@ TEST(MujocoCylinder, TranslationAlongXWithinThePaperBounds) {
 }
 
 // The other five cylinder experiments of the paper on MuJoCo, the same bounds. Measured
-// (manipulate stage, RMS position / orientation / force error): translate Y 3.2e-5 m,
-// 3.9e-4 rad, 0.035 N; translate Z 4.8e-5 m, 2.0e-3 rad, 0.45 N; rotate X 3.8e-5 m,
-// 2.1e-3 rad, 0.036 N; rotate Y 3.2e-5 m, 7.4e-4 rad, 0.036 N; rotate Z 3.2e-5 m,
-// 5.7e-4 rad, 0.036 N. Not reached: the 0.2 N force bound for translate Z (0.45 N: the
-// fingers push the cylinder along its axis, against friction alone), recorded only.
+// (manipulate stage, RMS position / orientation / force error): translate Y 3.3e-6 m,
+// 1.6e-4 rad, 0.0004 N; translate Z 2.6e-5 m, 4.3e-4 rad, 0.0028 N; rotate X 2.2e-5 m,
+// 2.1e-3 rad, 0.0009 N; rotate Y 3.3e-6 m, 6.8e-4 rad, 0.0007 N; rotate Z 4.2e-6 m,
+// 4.8e-4 rad, 0.0021 N.
 TEST(MujocoCylinder, OtherCylinderExperimentsWithinThePaperBounds) {
   for (ip::PaperTask task : {ip::PaperTask::translate, ip::PaperTask::rotate})
     for (int axis = 0; axis < 3; ++axis) {
@@ -133,9 +133,7 @@ TEST(MujocoCylinder, OtherCylinderExperimentsWithinThePaperBounds) {
       EXPECT_LT(m.rms_position_error, 5e-4);
       EXPECT_LT(m.rms_orientation_error, 1e-2);
       EXPECT_LT(m.final_position_error, 5e-4);
-      if (!(task == ip::PaperTask::translate && axis == 2)) {
-        EXPECT_LT(m.rms_force_error, 0.2);
-      }
+      EXPECT_LT(m.rms_force_error, 0.2);
     }
 }
 

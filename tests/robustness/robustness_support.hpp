@@ -11,7 +11,7 @@
 // stream (object pose, joints and contacts wobbling slightly around the grasp), with a
 // per-finger touching pattern. perfect_grasp_input() gives the tick that completes a
 // grasp at once when GraspParams::settle_time is 0 (contacts exactly on their targets
-// with their grasp forces, common/grasp_forces.hpp), which is how the suites reach the
+// with their grasp forces, ReactiveController::grasp_force), which is how the suites reach the
 // manipulation phase.
 // Units: m, rad, s, N; world frame.
 #pragma once
@@ -21,7 +21,6 @@
 #include <string>
 #include <vector>
 
-#include "common/grasp_forces.hpp"
 #include "common/test_support.hpp"
 #include "inhand/controller/reactive_controller.hpp"
 #include "inhand/sim/presets.hpp"
@@ -256,8 +255,6 @@ template <typename Ctrl>
 typename Ctrl::Input perfect_grasp_input(const Rig<Ctrl>& rig, const Ctrl& ctl,
                                          typename Ctrl::Scalar time) {
   typename Ctrl::Input in = nominal_input(rig, ctl, 0, all_touching(rig.fingers()), true);
-  const std::vector<typename Ctrl::Scalar> forces =
-      inhand_test::grasp_forces<typename Ctrl::Scalar, Ctrl::Dim>(rig.config, rig.targets);
   in.time = time;
   in.object_pose = rig.object;
   for (int i = 0; i < rig.fingers(); ++i) {
@@ -266,7 +263,7 @@ typename Ctrl::Input perfect_grasp_input(const Rig<Ctrl>& rig, const Ctrl& ctl,
     f.joint_positions = rig.q_nominal[static_cast<std::size_t>(i)];
     f.contact.contact_point = t.contact_point;
     f.contact.normal = t.normal;
-    f.contact.normal_force = forces[static_cast<std::size_t>(i)];
+    f.contact.normal_force = ctl.grasp_force(i);
     fill_external(rig, i, f, true);
   }
   return in;

@@ -1,20 +1,41 @@
 // Layer 2: what the force layer observes of each contact, from measurements only
 // (docs/method.md section 5, docs/force_layer.md).
 //
-// StiffnessEstimator: per finger, an exponentially weighted least-squares fit of the
-// measured normal force f [N] against the accumulated measured normal advance d [m]
-// of the fingertip into the object (d grows when the finger presses in), over a
-// memory of `window` seconds. The slope k = cov(d, f) / var(d) [N/m] replaces the
-// estimate only once a full window has passed, while the advance varies
-// (std(d) > min_excitation) and the fit explains at least min_fit of the force's
-// variance (cov^2 >= min_fit var(d) var(f)), clamped to [min_stiffness, max_stiffness].
-// Until then the estimate stays where it was (max_stiffness after reset: the safe side
-// for a loop whose gain is 1/k).
+// Both read the contact's relative step over the tick: the fingertip's material point at
+// the contact against the object's material point there, from measurements only. With
+// p_c the measured contact point, n its outward normal, (R, p_o) the measured object pose,
+//   d_tip = J (q_k - q_{k-1})                     the fingertip's measured step there,
+//   d_obj = p_c - (R_{k-1} c + p_{o,k-1}),  c = R_k^T (p_c - p_{o,k})
+//                                                 the object's measured step there,
+//   d     = d_tip - d_obj                         (ContactMotion).
+// Its normal part -n . d is the contact's advance (the change of its compression), its
+// tangential part (I - n n^T) d the contact's slide.
 //
-// SlipDetector: per finger, the contact point expressed in the OBJECT frame, low-passed
-// with 10 ms and with 100 ms; their difference, less its part along the object-frame
-// normal, longer than slip_distance [m] means the contact slides along the object (a
-// steady slide at v [m/s] gives 0.09 s * v).
+// StiffnessEstimator: per finger, an exponentially weighted least-squares fit of the
+// measured normal force f [N] against the accumulated advance a = sum(-n . d) [m]
+// (a grows when the finger presses in), over a memory of `window` seconds. The slope
+// k = cov(a, f) / var(a) [N/m] replaces the estimate only once a full window has passed,
+// while the advance varies (std(a) > min_excitation) and the fit explains at least
+// min_fit of the force's variance (cov^2 >= min_fit var(a) var(f)), clamped to
+// [min_stiffness, max_stiffness]. Until then the estimate stays where it was
+// (max_stiffness after reset: the safe side for a loop whose gain is 1/k). The object's
+// own measured motion is taken out of the advance: a finger that follows a moving
+// object (with an actuator's lag, or pushing it) has not compressed its contact by its
+// own travel. Noise in the measured pose lowers the fit (min_fit then holds the
+// estimate) rather than biasing it by more than 1 - min_fit.
+//
+// SlipDetector: per finger, the contact's slip s = sum((I - n n^T) d) [m] since the touch.
+// Rolling (the object turning on its contacts) moves the contact point along the object
+// and along the fingertip alike and leaves s unchanged; only sliding grows it. (A
+// detector that watches the contact point move along the object alone flags every
+// rolling contact: a released object that turns 20 mrad on a 20 mm cylinder moves its
+// contact points 0.4 mm.) s is low-passed with 10 ms (s_f) and with 100 ms (s_s). The
+// contact slides when |s_f - s_s| > slip_distance [m] (a steady slide at v [m/s] gives
+// 0.09 s * v) AND it still moves: |s - s_f| >= slip_distance / 18, half the lead of a
+// steady slide at the threshold speed slip_distance / 0.09 s. The second condition ends
+// the flag some 30 ms after a step: a compliant pad that shears by 0.4 mm when the
+// released object settles on it has moved, but it holds (it is not sliding). Noise in
+// the measured pose and joint angles does not accumulate: the sums of the steps telescope.
 //
 // Both are reset per finger at a touch onset (start()); update() touches only the
 // touching fingers. noexcept; fixed finger counts never allocate.
@@ -26,6 +47,56 @@
 #include "inhand/math/types.hpp"
 
 namespace inhand {
+
+/// The contacts' relative steps d over the tick and their advances -n . d (file comment).
+template <typename Scalar, int Dim, int NumFingers>
+class ContactMotion {
+ public:
+  using Points = Eigen::Matrix<Scalar, Dim, NumFingers>;
+  using ForceVector = Eigen::Matrix<Scalar, NumFingers, 1>;
+  using Mask = Eigen::Matrix<unsigned char, NumFingers, 1>;
+  using Vec = Vector<Scalar, Dim>;
+  using Rot = Rotation<Scalar, Dim>;
+
+  void resize(int fingers) {
+    steps_.setZero(Dim, fingers);
+    advance_.setZero(fingers);
+    reset();
+  }
+  /// Forgets the last object pose: the next update() takes d_obj as zero.
+  void reset() noexcept { has_pose_ = false; }
+  /// One tick: for the touching fingers, contact points and outward unit normals, and
+  /// `tip_steps` the fingertip's measured step at the contact (d_tip), world frame [m];
+  /// (R, p_o) the measured object pose. Fingers not touching get d = 0.
+  void update(const Mask& touching, const Points& points, const Points& normals,
+              const Points& tip_steps, const Rot& object_rotation,
+              const Vec& object_position) noexcept {
+    for (int i = 0; i < static_cast<int>(advance_.size()); ++i) {
+      steps_.col(i).setZero();
+      advance_(i) = Scalar(0);
+      if (!touching(i)) continue;
+      const Vec pc = points.col(i);
+      steps_.col(i) = tip_steps.col(i);
+      if (has_pose_) {
+        const Vec c = object_rotation.transpose() * (pc - object_position);
+        steps_.col(i) -= pc - (last_rotation_ * c + last_position_);
+      }
+      advance_(i) = -normals.col(i).dot(steps_.col(i));
+    }
+    last_rotation_ = object_rotation;
+    last_position_ = object_position;
+    has_pose_ = true;
+  }
+  const Points& steps() const noexcept { return steps_; }           ///< d [m], world frame
+  const ForceVector& advance() const noexcept { return advance_; }  ///< -n . d [m]
+
+ private:
+  Points steps_;
+  ForceVector advance_;
+  Rot last_rotation_ = Rot::Identity();
+  Vec last_position_ = Vec::Zero();
+  bool has_pose_ = false;
+};
 
 template <typename Scalar, int NumFingers>
 class StiffnessEstimator {
@@ -95,35 +166,34 @@ class SlipDetector {
  public:
   using Points = Eigen::Matrix<Scalar, Dim, NumFingers>;
   using Mask = Eigen::Matrix<unsigned char, NumFingers, 1>;
-  using Vec = Vector<Scalar, Dim>;
 
   void resize(int fingers) {
+    slip_.setZero(Dim, fingers);
     fast_.setZero(Dim, fingers);
     slow_.setZero(Dim, fingers);
   }
-  /// Touch onset of finger i at the object-frame contact point c [m].
-  void start(int i, const Vec& c) noexcept {
-    fast_.col(i) = c;
-    slow_.col(i) = c;
+  /// Touch onset of finger i: its slip and filters start at zero.
+  void start(int i) noexcept {
+    slip_.col(i).setZero();
+    fast_.col(i).setZero();
+    slow_.col(i).setZero();
   }
-  /// One tick; sets slipping(i) for the touching fingers that slide (only when
-  /// `object_free`: a held object cannot slip) and returns whether any does. Points and
-  /// normals in the world frame; the object pose (R, p_o) maps them into its frame.
-  bool update(const Mask& touching, const Points& points, const Points& normals,
-              const Rotation<Scalar, Dim>& object_rotation, const Vec& object_position,
-              bool object_free, Scalar slip_distance, Scalar dt, Mask& slipping) noexcept {
+  /// One tick. For the touching fingers: `steps` the contact's relative step d over the
+  /// tick [m] and the outward unit normals (world frame). Sets slipping(i) for the
+  /// touching fingers that slide (only when `object_free`: a held object cannot slip)
+  /// and returns whether any does.
+  bool update(const Mask& touching, const Points& steps, const Points& normals, bool object_free,
+              Scalar slip_distance, Scalar dt, Mask& slipping) noexcept {
     const Scalar af = Scalar(1) - std::exp(-dt / Scalar(0.01));
     const Scalar as = Scalar(1) - std::exp(-dt / Scalar(0.1));
     bool any = false;
-    for (int i = 0; i < static_cast<int>(fast_.cols()); ++i) {
+    for (int i = 0; i < static_cast<int>(slip_.cols()); ++i) {
       if (!touching(i)) continue;
-      const Vec c = object_rotation.transpose() * (points.col(i) - object_position);
-      fast_.col(i) += af * (c - fast_.col(i));
-      slow_.col(i) += as * (c - slow_.col(i));
-      const Vec m = object_rotation.transpose() * normals.col(i);
-      Vec d = fast_.col(i) - slow_.col(i);
-      d -= d.dot(m) * m;
-      if (object_free && d.norm() > slip_distance) {
+      slip_.col(i) += steps.col(i) - steps.col(i).dot(normals.col(i)) * normals.col(i);
+      fast_.col(i) += af * (slip_.col(i) - fast_.col(i));
+      slow_.col(i) += as * (slip_.col(i) - slow_.col(i));
+      if (object_free && (fast_.col(i) - slow_.col(i)).norm() > slip_distance &&
+          Scalar(18) * (slip_.col(i) - fast_.col(i)).norm() >= slip_distance) {
         slipping(i) = 1;
         any = true;
       }
@@ -132,7 +202,7 @@ class SlipDetector {
   }
 
  private:
-  Points fast_, slow_;
+  Points slip_, fast_, slow_;
 };
 
 }  // namespace inhand

@@ -6,6 +6,7 @@
 // Frames, units, signs: controller_io.hpp. noexcept, no allocation.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 
 #include "inhand/controller/controller_state.hpp"
@@ -27,7 +28,7 @@ struct TickInput {
 namespace detail {
 
 /// Layer 2's force layer: the touching fingers' contacts (unit normals), gated forces
-/// and measured normal advance since the last tick; `object_free` false while grasping.
+/// and fingertip steps since the last tick; `object_free` false while grasping.
 template <typename Types>
 void run_force_layer(const TickInput<Types>& t, bool object_free, ControllerState<Types>& st,
                      TickScratch<Types>& sc) noexcept {
@@ -36,18 +37,15 @@ void run_force_layer(const TickInput<Types>& t, bool object_free, ControllerStat
     const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     sc.touching(i) = f.contact.touching ? 1 : 0;
-    sc.advance(i) = Scalar(0);
+    sc.tip_steps.col(i).setZero();
     if (f.contact.touching) {
       sc.normals.col(i) = f.contact.normal.normalized();
       sc.points.col(i) = f.contact.contact_point;
       sc.measured(i) = m.force_gate.force();
-      // Fingertip displacement since the last tick (last tick's Jacobian) less the
-      // displacement the last command gave the object there, along -n.
+      // Fingertip displacement since the last tick, through the last tick's Jacobian.
       if (m.has_q_prev) {
         m.q_prev = f.joint_positions - m.q_prev;  // the joint step (no temporary)
-        typename Types::Vec dp;
-        dp.noalias() = m.jacobian * m.q_prev;
-        sc.advance(i) = -sc.normals.col(i).dot(dp - t.dt * m.last_motion);
+        sc.tip_steps.col(i).noalias() = m.jacobian * m.q_prev;
       }
     }
     m.q_prev = f.joint_positions;
@@ -59,7 +57,7 @@ void run_force_layer(const TickInput<Types>& t, bool object_free, ControllerStat
   step.normals = &sc.normals;
   step.measured = &sc.measured;
   step.pattern = &sc.pattern;
-  step.advance = &sc.advance;
+  step.tip_steps = &sc.tip_steps;
   step.object_position = t.object.position;
   step.object_rotation = t.object.rotation;
   step.min_force = t.config.force_planner.min_force;
@@ -90,7 +88,6 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   const ControllerWarning w = sc.fingers[static_cast<std::size_t>(i)].layer3.command(
       m.layer3, m.jacobian, f.joint_positions, v, f.contact.normal, force_active ? &force : nullptr,
       t.config.max_joint_acceleration, t.dt, fo);
-  m.last_motion = fo.servo.motion;
   fo.stiffness_estimate = st.forces.stiffness_estimate()(i);
   fo.force_integral = st.forces.integral()(i);
   fo.slipping = sc.forces.slipping(i) != 0;
@@ -119,27 +116,52 @@ void remember_contact(FingerMemory<Types>& m, const typename Types::TactileConta
 
 }  // namespace detail
 
-/// Grasp phase (grasp.hpp): approach, press with the nominal force, settle.
+/// Start of the grasp phase towards `targets` (validated): each finger's target, its
+/// grasp pattern q_g -- the planner's pattern over the targets' expected normals, every
+/// finger counted as touching (grasp.hpp); planned once, which also primes the planner's
+/// filter with it -- its grasp force f_g = s_g q_g, and fresh grasp memory. s_g =
+/// release_grip, or less if that would take some f_g above max_force: one scale for every
+/// finger keeps the pattern's balance (as the force layer's cap does).
+template <typename Types, typename Targets>
+void begin_grasp(const typename Types::Config& config, const Targets& targets,
+                 ControllerState<Types>& st, TickScratch<Types>& sc) noexcept {
+  const int n = static_cast<int>(st.fingers.size());
+  for (int i = 0; i < n; ++i) {
+    sc.touching(i) = 1;
+    sc.normals.col(i) = targets[static_cast<std::size_t>(i)].normal.normalized();
+  }
+  typename Types::Vec residual;
+  st.planner.reset();
+  st.planner.plan(sc.touching, sc.normals, config.control_period, sc.pattern, residual);
+  typename Types::ScalarType scale = config.force_layer.release_grip;
+  for (int i = 0; i < n; ++i)
+    if (scale * sc.pattern(i) > config.force_planner.max_force)
+      scale = config.force_planner.max_force / sc.pattern(i);
+  for (int i = 0; i < n; ++i) {
+    FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+    m.target = targets[static_cast<std::size_t>(i)];
+    m.target.normal.normalize();
+    m.grasp_pattern = sc.pattern(i);
+    m.grasp_force = scale * sc.pattern(i);
+    m.state = FingerState::approaching;
+    m.layer3.servo.reset();
+    m.settle.start();
+  }
+}
+
+/// Grasp phase (grasp.hpp): approach, press with the grasp forces, settle.
 template <typename Types>
 ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& st,
                              TickScratch<Types>& sc, typename Types::Output& out) noexcept {
   using Scalar = typename Types::ScalarType;
   const GraspParams<Scalar>& g = t.config.grasp;
   ControllerWarning w = out.warnings;
-  // The grasp presses with the planner's pattern over the targets' expected normals
-  // (every finger counted as touching): the forces that leave the object in
-  // equilibrium once it is released, if the contacts are where they were asked for.
-  // The expected normals are fixed, so the pattern is too (no sensor noise in it).
+  // A placed finger presses with its grasp force f_g, a finger not yet placed slides to
+  // its target with slide_force_fraction of its pattern q_g (both set by start_grasp).
   for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {
-    sc.touching(i) = 1;
-    sc.normals.col(i) = st.fingers[static_cast<std::size_t>(i)].target.normal;
+    const FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+    sc.pattern(i) = m.settle.placed ? m.grasp_force : g.slide_force_fraction * m.grasp_pattern;
   }
-  typename Types::Vec residual;
-  st.planner.plan(sc.touching, sc.normals, t.dt, sc.pattern, residual);
-  // A finger not yet placed slides to its target with a fraction of its grasp force.
-  for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i)
-    if (!st.fingers[static_cast<std::size_t>(i)].settle.placed)
-      sc.pattern(i) *= g.slide_force_fraction;
   detail::run_force_layer(t, false, st, sc);
   bool all_placed = true;
   for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {
@@ -161,10 +183,10 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
       // Complete with the full grasp force f_g. A placed finger stays placed: it no
       // longer moves along the object, so its contact no longer changes (sensor noise
       // alone would otherwise un-place it).
-      const Scalar fd = m.settle.placed ? sc.pattern(i) : sc.pattern(i) / g.slide_force_fraction;
       m.settle.placed = m.settle.placed || press.placed;
-      all_placed = all_placed && m.settle.placed &&
-                   std::abs(m.force_gate.force() - fd) <= g.force_tolerance * fd;
+      all_placed =
+          all_placed && m.settle.placed &&
+          std::abs(m.force_gate.force() - m.grasp_force) <= g.force_tolerance * m.grasp_force;
     } else {
       if (m.state == FingerState::pressing) m.layer3.servo.reset_force();
       m.settle.start();

@@ -28,13 +28,14 @@ struct FingerMemory {
   using Vec = typename Types::Vec;
   /// Layer 3's servo integrators and last command.
   FingerServoMemory<Scalar, Types::kDim, Types::kDof, Types::kMaxDof> layer3{};
-  /// The Jacobian of the point servoed on the last tick: this tick's measured advance
+  /// The Jacobian of the point servoed on the last tick: this tick's measured step
   /// of the fingertip is J (q - q_prev).
   typename Types::Jacobian jacobian{};
   typename Types::JointVector q_prev{};  ///< rad, joint positions of the last tick
   bool has_q_prev = false;
-  Vec last_motion = Vec::Zero();  ///< m/s, the last tick's motion part of the command
   GraspTarget<Scalar, Types::kDim> target{};
+  Scalar grasp_pattern = Scalar(0);  ///< N, q_g of grasp.hpp, set by start_grasp
+  Scalar grasp_force = Scalar(0);    ///< N, f_g of grasp.hpp, set by start_grasp
   FingerState state = FingerState::idle;
   SettleWindow<Scalar, Types::kDim> settle{};
   ForceGate<Scalar> force_gate{};
@@ -88,7 +89,6 @@ struct ControllerState {
       m.layer3.last_command.setZero();
       m.state = FingerState::idle;
       m.has_q_prev = false;
-      m.last_motion.setZero();
       m.force_gate.reset();
     }
   }
@@ -112,7 +112,7 @@ struct TickScratch {
   typename Planner::Normals points{};        ///< m, contact points of the touching
   typename Planner::ForceVector pattern{};   ///< N, the planner's pattern q
   typename Planner::ForceVector measured{};  ///< N, gated normal forces
-  typename Planner::ForceVector advance{};   ///< m, measured normal advance this tick
+  typename Planner::Normals tip_steps{};     ///< m, fingertip step at the contact this tick
   typename Forces::Result forces{};
   /// Sizes and configures every part for the configuration (allocates only for
   /// run-time sizes).
@@ -131,7 +131,7 @@ struct TickScratch {
     points = Planner::Normals::Zero(Types::kDim, n);
     pattern = Planner::ForceVector::Zero(n);
     measured = Planner::ForceVector::Zero(n);
-    advance = Planner::ForceVector::Zero(n);
+    tip_steps = Planner::Normals::Zero(Types::kDim, n);
     forces.velocity.setZero(n);
     forces.target.setZero(n);
     forces.slipping.setZero(n);

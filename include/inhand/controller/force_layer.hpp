@@ -53,9 +53,11 @@
 //                     it slipped (that grip was just at the friction cone's edge, eq. 8);
 //                     it decays back to 1 with time constant grip_decay_time once the
 //                     slip stops (the grip falls back when the load goes);
-// capped at the largest s for which no target exceeds max_force. When the cap binds
-// while a finger slips, or min_force cannot be met, `beyond_capacity` is raised: the
-// load exceeds what the hand can hold with this friction.
+// capped at the largest s for which no target exceeds max_force. When a finger has
+// slipped with the cap binding for capacity_time (a slide the grip at its cap did not
+// stop), or min_force cannot be met, `beyond_capacity` is raised: the load exceeds what
+// the hand can hold with this friction. (A slip at the cap that stops sooner -- a pad
+// shearing as the released object settles -- is not reported as such.)
 // Slip: SlipDetector (contact_observers.hpp).
 #pragma once
 
@@ -93,9 +95,9 @@ class ForceLayer {
     const Points* normals = nullptr;
     const ForceVector* measured = nullptr;
     const ForceVector* pattern = nullptr;
-    /// Per finger, the measured normal advance into the object over the last tick [m]:
-    /// -n . (fingertip displacement - the object's commanded displacement there).
-    const ForceVector* advance = nullptr;
+    /// Per finger, the fingertip's measured displacement at its contact over the last
+    /// tick [m], world frame: J (q - q_prev) (d_tip of contact_observers.hpp).
+    const Points* tip_steps = nullptr;
     Vec object_position = Vec::Zero();
     Rotation<Scalar, Dim> object_rotation = Rotation<Scalar, Dim>::Identity();
     Scalar min_force = Scalar(0);
@@ -124,6 +126,7 @@ class ForceLayer {
     e_.setZero(fingers);
     q_int_.setZero(fingers);
     r_load_.setZero(fingers);
+    motion_.resize(fingers);
     stiffness_.resize(fingers);
     slip_.resize(fingers);
     map_.resize(fingers);
@@ -138,9 +141,11 @@ class ForceLayer {
     z_.setZero();
     stiffness_.reset(params_.max_stiffness);
     was_touching_.setZero();
+    motion_.reset();
     grip_slip_ = Scalar(1);
     was_slipping_ = false;
     was_free_ = false;
+    capped_slip_time_ = Scalar(0);
   }
 
   const ForceVector& stiffness_estimate() const noexcept { return stiffness_.estimate(); }
@@ -162,16 +167,17 @@ class ForceLayer {
       if (t && !was_touching_(i)) {
         z_(i) = Scalar(0);
         stiffness_.start(i, (*in.measured)(i));
-        slip_.start(i, in.object_rotation.transpose() * (in.points->col(i) - in.object_position));
+        slip_.start(i);
       }
       was_touching_(i) = t ? 1 : 0;
     }
+    motion_.update(touching, *in.points, *in.normals, *in.tip_steps, in.object_rotation,
+                   in.object_position);
     stiffness_.update(
         {p.min_stiffness, p.max_stiffness, p.stiffness_window, p.min_excitation, p.min_fit},
-        touching, *in.advance, *in.measured, dt);
-    const bool slipping =
-        slip_.update(touching, *in.points, *in.normals, in.object_rotation, in.object_position,
-                     in.object_free, p.slip_distance, dt, out.slipping);
+        touching, motion_.advance(), *in.measured, dt);
+    const bool slipping = slip_.update(touching, motion_.steps(), *in.normals, in.object_free,
+                                       p.slip_distance, dt, out.slipping);
 
     // Rigid / internal split of the touching fingers' normal-force space.
     map_.build(touching, *in.points, *in.normals, in.object_position, p.rigid_tolerance);
@@ -253,11 +259,15 @@ class ForceLayer {
     }
     was_free_ = in.object_free;
     Scalar s = std::max(s_lo, grip_slip_);
+    bool capped_slip = false;
     if (s > s_hi) {
       s = std::max(Scalar(1), s_hi);
-      if (slipping || s_lo > s_hi) infeasible = true;
+      capped_slip = slipping;
+      if (s_lo > s_hi) infeasible = true;
       grip_slip_ = std::min(grip_slip_, s);  // no windup above the cap
     }
+    capped_slip_time_ = capped_slip ? capped_slip_time_ + in.dt : Scalar(0);
+    if (capped_slip && capped_slip_time_ >= p.capacity_time) infeasible = true;
     grip_ = s;
     if (s > Scalar(1) + Scalar(1e-6)) status |= ForceLayerStatus::grip_raised;
     if (infeasible) status |= ForceLayerStatus::beyond_capacity;
@@ -272,9 +282,11 @@ class ForceLayer {
   StiffnessEstimator<Scalar, NumFingers> stiffness_{};
   SlipDetector<Scalar, Dim, NumFingers> slip_{};
   Map map_{};
+  ContactMotion<Scalar, Dim, NumFingers> motion_{};
   ForceVector e_, q_int_, r_load_;  ///< per-tick scratch (preallocated)
   Scalar grip_ = Scalar(1);
   Scalar grip_slip_ = Scalar(1);
+  Scalar capped_slip_time_ = Scalar(0);  ///< s a finger has slipped with the cap binding
   bool was_slipping_ = false;
   bool was_free_ = false;
 };

@@ -29,6 +29,7 @@ struct ForceLayerParams {
   Scalar release_grip = Scalar(2);             ///< >= 1, s when the object is released (decays)
   Scalar rigid_tolerance = Scalar(0.1);        ///< eps, dimensionless (see the file comment)
   Scalar contact_damping = Scalar(10);         ///< c [N s/m], largest expected; 0: no gain cap
+  Scalar capacity_time = Scalar(0.02);  ///< [s], slip at the grip's cap before beyond_capacity
 
   Validation validate() const noexcept {
     const Scalar inf = std::numeric_limits<Scalar>::infinity();
@@ -53,6 +54,7 @@ struct ForceLayerParams {
         {"force_layer.release_grip", release_grip, Scalar(1), inf, false},
         {"force_layer.rigid_tolerance", rigid_tolerance, Scalar(0), inf, true},
         {"force_layer.contact_damping", contact_damping, Scalar(0), inf, false},
+        {"force_layer.capacity_time", capacity_time, Scalar(0), inf, false},
     };
     for (const Field& f : fields) {
       const bool ok =

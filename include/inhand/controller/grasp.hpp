@@ -6,7 +6,7 @@
 // (the approach direction is -n_t). Because the geometry is unknown, the finger keeps
 // creeping along -n_t at `creep_speed` after reaching p_t until tactile sensing reports
 // contact. On contact the actual contact point is recorded and the finger presses with
-// its grasp force f_g (force servo along the measured normal) while its contact point is
+// a light force (force servo along the measured normal; see below) while its contact point is
 // drawn tangentially towards p_t with `tangential_gain`; in addition the fingertip
 // slides along the tangential part of n_t at up to `alignment_speed`, which on a convex
 // object turns the measured normal n towards the expected one (a target on the
@@ -19,20 +19,28 @@
 // sphere) -- and touches with |f - f_g| <= force_tolerance * f_g, for `settle_time`
 // seconds (the paper: "the predefined desired contact points and the desired force are
 // approached").
-// The grasp forces f_g are the force planner's pattern over the EXPECTED normals n_t,
+// The grasp pattern q_g is the force planner's pattern over the EXPECTED normals n_t,
 // every finger counted as touching (preset fingers nominal_force, the balancing ones
 // what cancels the resultant): the object is then in equilibrium at release if the
 // contacts are where they were asked for. (Equal forces on three fingers against a
 // thumb would push the object into the thumb with twice the nominal force at release.)
-// n_t is fixed, so f_g is free of sensor noise.
-// A finger slides to its target lightly: it servos to slide_force_fraction * f_g until
+// n_t is fixed, so q_g is planned once, by start_grasp, free of sensor noise.
+// A placed finger presses with its grasp force f_g = s_g q_g, s_g = release_grip
+// (force_layer_params.hpp) or less if some f_g would exceed max_force (one scale for all,
+// so the pattern stays balanced): the grip the force layer holds the object with on its
+// first free tick is then already there when the object is released. A load the held
+// object hid (its weight, say) arrives at release as a step, faster than any force
+// loop can answer -- a 400 g object released towards the thumb of a 33 kN/m grasp
+// opened the fingers' contacts (30 um of compression at 1 N) within 3 ms -- so only
+// compression already in the contacts carries it.
+// A finger slides to its target lightly: it servos to slide_force_fraction * q_g until
 // its contact is first placed; from then on it presses with f_g and no longer slides
 // (its contact velocity is the force servo's, along the normal). Sliding under a normal force f
 // leaves a tangential force of up to mu f on the object (friction, which tactile normal
 // sensing cannot see); the frozen object takes it, and at release it acts as a step
 // load. Fingers that touched 9 mm below a cylinder's equator and slid to it at full
 // force left 0.8 * 6 N = 4.8 N on a 50 g object, which then rolled out of a stiff
-// (50 kN/m) grasp in 9 ms; sliding at 0.3 f_g leaves 30 % of that.
+// (50 kN/m) grasp in 9 ms; sliding at 0.3 q_g leaves 30 % of that.
 // During manipulation a finger that loses contact re-approaches along its last
 // measured normal, aiming at its last contact point carried rigidly with the measured
 // object pose, and is reported as `reacquiring` until it touches again.

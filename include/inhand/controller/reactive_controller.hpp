@@ -139,14 +139,7 @@ class ReactiveController {
       const Validation v = targets[static_cast<std::size_t>(i)].validate();
       if (!v.ok()) return v.for_finger(i);
     }
-    for (int i = 0; i < finger_count(); ++i) {
-      FingerMemory<Types>& s = state_.fingers[static_cast<std::size_t>(i)];
-      s.target = targets[static_cast<std::size_t>(i)];
-      s.target.normal.normalize();
-      s.state = FingerState::approaching;
-      s.layer3.servo.reset();
-      s.settle.start();
-    }
+    begin_grasp<Types>(config_, targets, state_, scratch_);
     state_.settled_time = Scalar(0);
     state_.phase = Phase::grasping;
     return Validation::valid();
@@ -237,6 +230,13 @@ class ReactiveController {
     out.dt = Scalar(0);
     out.numerical_fault = stage;
     return ControllerStatus::numerical_fault;
+  }
+
+  /// Finger i's grasp force f_g [N] (grasp.hpp): what it presses with once placed; 0 before
+  /// start_grasp() (and for an i out of range).
+  Scalar grasp_force(int i) const noexcept {
+    return i >= 0 && i < finger_count() ? state_.fingers[static_cast<std::size_t>(i)].grasp_force
+                                        : Scalar(0);
   }
 
   /// Largest |integral| of any finger's force loop (N s): for monitoring windup.
