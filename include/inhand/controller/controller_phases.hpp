@@ -6,7 +6,6 @@
 // Frames, units, signs: controller_io.hpp. noexcept, no allocation.
 #pragma once
 
-#include <algorithm>
 #include <cstddef>
 
 #include "inhand/controller/controller_state.hpp"
