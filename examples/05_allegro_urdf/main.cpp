@@ -18,7 +18,7 @@ int main() {
   const auto urdf = inhand::urdf::read_fingers_file<ip::PlantFinger>(INHAND_ALLEGRO_URDF, specs);
   if (!urdf.ok()) return std::fprintf(stderr, "%s\n", urdf.error.c_str()), 1;
 
-  // Grasp (1 N per finger, the thumb balancing them), hold 2 s, rotate 0 -> -0.2 rad -> 0
+  // Grasp (1 N each, the thumb balancing, pressed x2), hold 2 s, rotate 0 -> -0.2 rad -> 0
   // about X, settle 1 s.
   ip::ScenarioSpec s = ip::paper_scenario(ip::PaperObject::cylinder, ip::PaperTask::rotate, 0);
   s.hand = ip::allegro_like_hand();  // finger roles and open / grasp postures
