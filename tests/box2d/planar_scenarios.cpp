@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "common/controller_instances.hpp"
 #include "common/test_support.hpp"
 #include "planar_scenario.hpp"
 #include "report.hpp"

@@ -9,7 +9,7 @@ if(box2d_FOUND AND nlohmann_json_FOUND AND GTest_FOUND)
   add_executable(box2d_planar_scenarios ${CMAKE_CURRENT_LIST_DIR}/planar_scenarios.cpp)
   target_include_directories(box2d_planar_scenarios PRIVATE
     ${CMAKE_CURRENT_SOURCE_DIR} ${PROJECT_SOURCE_DIR}/examples ${PROJECT_SOURCE_DIR}/examples/box2d)
-  target_link_libraries(box2d_planar_scenarios PRIVATE inhand::sim inhand_warnings box2d::box2d
+  target_link_libraries(box2d_planar_scenarios PRIVATE inhand::sim inhand_test_instances inhand_warnings box2d::box2d
                         nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
   gtest_discover_tests(box2d_planar_scenarios DISCOVERY_TIMEOUT 60 TEST_PREFIX box2d.
                        PROPERTIES LABELS box2d TIMEOUT 120)

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "common/controller_instances.hpp"
 #include "common/test_support.hpp"
 #include "inhand/sim/paper_scenarios.hpp"
 #include "inhand/sim/scenario_runner.hpp"

@@ -21,7 +21,7 @@ if(mujoco_FOUND AND GTest_FOUND)
       ${CMAKE_CURRENT_SOURCE_DIR} ${PROJECT_SOURCE_DIR}/examples/mujoco)
     target_compile_definitions(${name} PRIVATE INHAND_MODELS_DIR="${PROJECT_SOURCE_DIR}/models"
       INHAND_TEST_DATA_DIR="${CMAKE_CURRENT_LIST_DIR}/data")
-    target_link_libraries(${name} PRIVATE inhand::sim inhand_warnings mujoco::mujoco
+    target_link_libraries(${name} PRIVATE inhand::sim inhand_test_instances inhand_warnings mujoco::mujoco
                           GTest::gtest GTest::gtest_main)
     gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_PREFIX mujoco.
                          PROPERTIES LABELS mujoco TIMEOUT 120)

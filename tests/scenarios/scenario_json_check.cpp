@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "common/atomic_file.hpp"
+#include "common/controller_instances.hpp"
 #include "common/expectations.hpp"
 #include "common/summary_json.hpp"
 #include "common/test_support.hpp"

@@ -18,7 +18,7 @@ if(GTest_FOUND AND nlohmann_json_FOUND)
   add_executable(scenarios_scenario_json_check ${CMAKE_CURRENT_LIST_DIR}/scenario_json_check.cpp)
   target_include_directories(scenarios_scenario_json_check PRIVATE
     ${PROJECT_SOURCE_DIR}/examples ${PROJECT_SOURCE_DIR}/examples/scenario ${PROJECT_SOURCE_DIR}/tests)
-  target_link_libraries(scenarios_scenario_json_check PRIVATE inhand::sim inhand_warnings
+  target_link_libraries(scenarios_scenario_json_check PRIVATE inhand::sim inhand_test_instances inhand_warnings
     nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
   target_compile_definitions(scenarios_scenario_json_check PRIVATE
     INHAND_SCENARIO_DIR="${INHAND_SCENARIOS_DIR}" INHAND_README="${PROJECT_SOURCE_DIR}/docs/scenarios.md")

@@ -1,0 +1,48 @@
+// Controller code several test files share, compiled once. Nearly all of the compile of a
+// ReactiveController instantiation is its two phase functions (grasp_phase and
+// manipulation_phase, controller/controller_phases.hpp), and nearly all of a plant
+// scenario's is ScenarioRunner<HandPlantAdapter>::run (sim/scenario_runner.hpp). This
+// header declares them `extern template` for the controller types below, which at least
+// two test files each instantiate; their one definition is in controller_instances_*.cpp
+// (library inhand_test_instances). The tests' precompiled header includes this header, so
+// every test linked with that library uses it; a file that does not include it (for
+// example realtime/no_allocation_test.cpp, compiled with its own Eigen macro) instantiates
+// what it uses itself, as a user's code does. Build plumbing only: nothing here changes
+// what the tests check.
+#pragma once
+
+#include "inhand/inhand.hpp"
+#include "inhand/sim/hand_plant_scenario.hpp"
+
+namespace inhand_test::instances {
+
+/// The analytic plant's controller (sim/hand_plant_scenario.hpp: HandController).
+using Hand = inhand::ControllerTypes<double, 3, inhand::Dynamic, inhand::Dynamic, 6>;
+using Spatial3x3 = inhand::ControllerTypes<double, 3, 3, 3, 3>;
+using Spatial3x3Float = inhand::ControllerTypes<float, 3, 3, 3, 3>;
+using Planar2x3 = inhand::ControllerTypes<double, 2, 2, 3, 3>;
+using Planar3x3 = inhand::ControllerTypes<double, 2, 3, 3, 3>;
+using PlanarDynamic4 = inhand::ControllerTypes<double, 2, inhand::Dynamic, inhand::Dynamic, 4>;
+
+}  // namespace inhand_test::instances
+
+// INHAND_TEST_PHASES(prefix, T): the explicit instantiation of both phase functions for
+// ControllerTypes T, declared (prefix `extern`) or defined (empty prefix), in namespace
+// inhand.
+#define INHAND_TEST_PHASES(PREFIX, T)                                                            \
+  PREFIX template ControllerStatus grasp_phase<T>(const TickInput<T>&, ControllerState<T>&,      \
+                                                  TickScratch<T>&, T::Output&) noexcept;         \
+  PREFIX template ControllerStatus manipulation_phase<T>(                                        \
+      const TickInput<T>&, const ObjectTrajectory<T::ScalarType, T::kDim>&, ControllerState<T>&, \
+      TickScratch<T>&, T::Output&) noexcept;
+
+namespace inhand {
+INHAND_TEST_PHASES(extern, inhand_test::instances::Hand)
+INHAND_TEST_PHASES(extern, inhand_test::instances::Spatial3x3)
+INHAND_TEST_PHASES(extern, inhand_test::instances::Spatial3x3Float)
+INHAND_TEST_PHASES(extern, inhand_test::instances::Planar2x3)
+INHAND_TEST_PHASES(extern, inhand_test::instances::Planar3x3)
+INHAND_TEST_PHASES(extern, inhand_test::instances::PlanarDynamic4)
+}  // namespace inhand
+
+extern template class inhand::sim::ScenarioRunner<inhand::plant::HandPlantAdapter>;
