@@ -138,6 +138,98 @@ TEST(MujocoCylinder, OtherCylinderExperimentsWithinThePaperBounds) {
     }
 }
 
+// The fault scenarios of the analytic plant (scenarios/faults/*.json: each fault 1 s into
+// the 5 mm reciprocating translation along X, i.e. the paper's translate X) on MuJoCo,
+// with those files' bounds: the fault reported within 2 ticks (tactile dropout: the
+// finger reacquiring; force spike and pose outlier: their warnings), a dropped-out finger
+// touching again within 10 ticks of the window, the largest |force integral| from the
+// fault on within the file's bound, the task within the paper bounds, no drop and no
+// contact loss; the files' outlier gates. The knock (3 N along +Z for 20 ms on the 50 g cylinder)
+// is not required to be reported: it need not open a contact.
+struct FaultCase {
+  inhand::sim::FaultSpec<3> fault;
+  long max_detection_ticks;   // -1: no bound
+  long max_reacquire_ticks;   // -1: no bound
+  double max_force_integral;  // N s
+};
+
+FaultCase fault_case(inhand::sim::FaultKind kind) {
+  FaultCase c{};
+  c.fault.kind = kind;
+  c.fault.stage = "manipulate";
+  c.fault.at = 1.0;
+  c.max_detection_ticks = 2;
+  c.max_reacquire_ticks = -1;
+  switch (kind) {
+    case inhand::sim::FaultKind::tactile_dropout:
+      c.fault.duration = 0.05;
+      c.fault.finger = 1;
+      c.max_reacquire_ticks = 10;
+      c.max_force_integral = 0.05;
+      break;
+    case inhand::sim::FaultKind::force_spike:
+      c.fault.duration = 0.004;
+      c.fault.finger = 2;  // the opposing finger, as the thumb in the file
+      c.fault.magnitude = 3.0;
+      c.max_force_integral = 0.02;
+      break;
+    case inhand::sim::FaultKind::pose_outlier:
+      c.fault.duration = 0.003;
+      c.fault.vector = Eigen::Vector3d(0.01, 0.0, 0.0);
+      c.max_force_integral = 0.02;
+      break;
+    default:  // knock
+      c.fault.duration = 0.02;
+      c.fault.vector = Eigen::Vector3d(0.0, 0.0, 3.0);
+      c.max_detection_ticks = -1;
+      c.max_force_integral = 0.03;
+      break;
+  }
+  return c;
+}
+
+TEST(MujocoCylinder, FaultScenariosReportedAndRecoveredWithinTheirBounds) {
+  using inhand::sim::FaultKind;
+  for (FaultKind kind : {FaultKind::tactile_dropout, FaultKind::force_spike,
+                         FaultKind::pose_outlier, FaultKind::knock}) {
+    const FaultCase c = fault_case(kind);
+    Spec spec = cylinder_experiment(ip::PaperTask::translate, 0);
+    spec.faults.push_back(c.fault);
+    // The fault files' outlier gates (off by default): 0.2 m/s, 5 rad/s, 200 N/s.
+    spec.controller.outlier_gates.max_object_speed = 0.2;
+    spec.controller.outlier_gates.max_object_angular_speed = 5.0;
+    spec.controller.outlier_gates.max_force_rate = 200.0;
+    spec.controller.outlier_gates.max_consecutive_rejections = 5;
+    const std::string name = inhand::sim::to_string(kind);
+    SCOPED_TRACE(name);
+    const inhand::sim::ScenarioResult r = run(spec);
+    ASSERT_EQ(r.failure, "");
+    ASSERT_EQ(r.stages.size(), 3u);
+    ASSERT_EQ(r.faults.size(), 1u);
+    const inhand::sim::FaultReport& f = r.faults[0];
+    const ip::StageMetrics& m = r.stages[2];
+    inhand_test::record(name + "_detection_ticks", static_cast<double>(f.detection_ticks));
+    inhand_test::record(name + "_reacquire_ticks", static_cast<double>(f.reacquire_ticks));
+    inhand_test::record(name + "_max_force_integral_Ns", f.max_force_integral);
+    inhand_test::record(name + "_rms_position_error_m", m.rms_position_error);
+    inhand_test::record(name + "_final_position_error_m", m.final_position_error);
+    EXPECT_FALSE(r.dropped);
+    EXPECT_EQ(r.contact_losses, 0);
+    if (c.max_detection_ticks >= 0) {
+      EXPECT_GE(f.detection_ticks, 0);
+      EXPECT_LE(f.detection_ticks, c.max_detection_ticks);
+    }
+    if (c.max_reacquire_ticks >= 0) {
+      EXPECT_GE(f.reacquire_ticks, 0);
+      EXPECT_LE(f.reacquire_ticks, c.max_reacquire_ticks);
+    }
+    EXPECT_LE(f.max_force_integral, c.max_force_integral);
+    EXPECT_LT(m.rms_position_error, 5e-4);
+    EXPECT_LT(m.final_position_error, 5e-4);
+    EXPECT_LT(m.rms_orientation_error, 1e-2);
+  }
+}
+
 // Every tick's record, flattened: time, stage, status, the object's true pose, and per
 // finger the joint angles, the measured contact (touching, normal force, point, normal)
 // and the commanded joint velocities.
