@@ -70,6 +70,14 @@ struct MujocoSetup {
   /// ctrl = qd + position_gain (q_ref - q), q_ref the integral of qd; 0 leaves a pure
   /// velocity servo (no position hold). [1/s]
   double position_gain = 30.0;
+  /// Sliding friction coefficient of the object's and the fingertips' geoms (MuJoCo takes
+  /// a contact pair's largest); 0 keeps the model's. [-]
+  double friction = 0.0;
+  /// Torsional friction coefficient of the object's geoms, switched on with it (condim 4;
+  /// the model's condim 3 has none); 0 leaves it off. [m]
+  double torsional_friction = 0.0;
+  /// Object mass, its inertia scaled with it (the same shape); 0 keeps the model's. [kg]
+  double object_mass = 0.0;
 };
 
 class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSetup, mjModel> {
@@ -90,6 +98,7 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
     hold_ = mj_name2id(m, mjOBJ_EQUALITY, s.object_hold.c_str());
     if (hold_ < 0 || m->eq_type[hold_] != mjEQ_WELD)
       throw std::invalid_argument("mujoco: no weld equality " + s.object_hold);
+    apply_contact_and_mass(s);  // before the fingers' angles: mj_setConst resets qpos
     chains_ = finger_chains(m, s.fingers);
     for (std::size_t i = 0; i < s.fingers.size(); ++i) {
       Finger f;
@@ -200,6 +209,30 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
   const mjData& data() const noexcept { return *data_; }
 
  private:
+  /// MujocoSetup::friction, torsional_friction and object_mass into the model, then its
+  /// derived constants recomputed (mj_setConst, which also puts qpos back to qpos0).
+  void apply_contact_and_mass(const Setup& s) {
+    if (!(s.friction >= 0.0 && s.torsional_friction >= 0.0 && s.object_mass >= 0.0))
+      throw std::invalid_argument("mujoco: friction, torsional_friction, object_mass must be >= 0");
+    mjModel* m = model_.get();
+    for (int g = 0; g < m->ngeom; ++g) {
+      bool tip = false;
+      for (const FingerNames& f : s.fingers)
+        tip = tip || mj_name2id(m, mjOBJ_GEOM, f.tip_geom.c_str()) == g;
+      if (!on_object(g) && !tip) continue;
+      if (s.friction > 0.0) m->geom_friction[3 * g] = s.friction;
+      if (s.torsional_friction > 0.0 && on_object(g)) {
+        m->geom_condim[g] = 4;
+        m->geom_friction[3 * g + 1] = s.torsional_friction;
+      }
+    }
+    if (s.object_mass > 0.0) {
+      const double scale = s.object_mass / m->body_mass[object_];
+      m->body_mass[object_] = s.object_mass;
+      for (int k = 0; k < 3; ++k) m->body_inertia[3 * object_ + k] *= scale;
+    }
+    mj_setConst(m, data_.get());
+  }
   struct Finger {
     int tip = -1;
     std::vector<int> qpos, actuator;
