@@ -43,6 +43,7 @@
 #include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "inhand/sim/hand_plant_scenario.hpp"
@@ -212,8 +213,13 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
   /// MujocoSetup::friction, torsional_friction and object_mass into the model, then its
   /// derived constants recomputed (mj_setConst, which also puts qpos back to qpos0).
   void apply_contact_and_mass(const Setup& s) {
-    if (!(s.friction >= 0.0 && s.torsional_friction >= 0.0 && s.object_mass >= 0.0))
-      throw std::invalid_argument("mujoco: friction, torsional_friction, object_mass must be >= 0");
+    const std::pair<const char*, double> fields[] = {{"friction", s.friction},
+                                                     {"torsional_friction", s.torsional_friction},
+                                                     {"object_mass", s.object_mass}};
+    for (const auto& [name, value] : fields)
+      if (!(std::isfinite(value) && value >= 0.0))
+        throw std::invalid_argument(std::string("mujoco: setup.") + name +
+                                    ": must be finite and >= 0");
     mjModel* m = model_.get();
     for (int g = 0; g < m->ngeom; ++g) {
       bool tip = false;

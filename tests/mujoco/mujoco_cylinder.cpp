@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -286,6 +288,31 @@ TEST(MujocoCylinder, FrictionTorsionAndMassSweep) {
     EXPECT_EQ(r.contact_losses, 0);
     EXPECT_LT(r.stages[2].rms_position_error, 5e-4);
     EXPECT_LT(r.stages[2].rms_orientation_error, 1e-2);
+  }
+}
+
+// The sweep's settings are checked before the world is built, the field named.
+TEST(MujocoCylinder, ContactAndMassSettingsAreValidated) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Bad {
+    const char* field;
+    double friction, torsional, mass;
+  };
+  for (const Bad& b :
+       {Bad{"setup.friction", nan, 0.0, 0.0}, Bad{"setup.friction", -0.1, 0.0, 0.0},
+        Bad{"setup.torsional_friction", 0.0, inf, 0.0}, Bad{"setup.object_mass", 0.0, 0.0, -1.0}}) {
+    Spec spec = cylinder_experiment(ip::PaperTask::translate, 0);
+    spec.friction = b.friction;
+    spec.torsional_friction = b.torsional;
+    spec.object_mass = b.mass;
+    std::string message;
+    try {
+      (void)run(spec);
+    } catch (const std::invalid_argument& e) {
+      message = e.what();
+    }
+    EXPECT_NE(message.find(b.field), std::string::npos) << b.field << ": " << message;
   }
 }
 
