@@ -1,4 +1,5 @@
-// inhand_scenario: runs one scenario file on the analytic 3-D plant and reports the
+// inhand_scenario: runs one scenario file on its plant (the analytic 3-D plant, or MuJoCo
+// with "plant": {"engine": "mujoco"} in a build that found MuJoCo) and reports the
 // per-stage metrics; or, with --table, tabulates the summaries of earlier runs.
 //
 //   inhand_scenario <scenario.json> [--out DIR] [--trace FILE.csv] [--summary FILE.json]
@@ -46,6 +47,9 @@
 #include "common/summary_json.hpp"
 #include "common/trace_csv.hpp"
 #include "scenario_json.hpp"
+#ifdef INHAND_SCENARIO_WITH_MUJOCO
+#include "mujoco_adapter.hpp"
+#endif
 
 namespace {
 
@@ -268,10 +272,71 @@ std::string work_bound_violation(const Options& o, const ip::ScenarioSpec& spec,
   return "";
 }
 
+#ifdef INHAND_SCENARIO_WITH_MUJOCO
+namespace md = inhand::mujoco_demo;
+
+/// The MuJoCo run of a scenario file (engine "mujoco"): the file's MujocoPlantFile into
+/// the adapter's MujocoSetup, the rest as parsed.
+inhand::sim::ScenarioSpec<md::MujocoAdapter> mujoco_spec(const ex::ScenarioFile& sf) {
+  inhand::sim::ScenarioSpec<md::MujocoAdapter> s;
+  const ex::MujocoPlantFile& p = sf.mujoco;
+  s.model_file = p.model.find('/') == std::string::npos ? md::model_path(p.model) : p.model;
+  s.hand = sf.spec.hand;
+  s.position_gain = p.position_gain;
+  s.friction = p.friction;
+  s.torsional_friction = p.torsional_friction;
+  s.touch_threshold = p.touch_threshold;
+  s.object_mass = p.object_mass;
+  s.name = sf.spec.name;
+  s.controller = sf.spec.controller;
+  s.stages = sf.spec.stages;
+  s.faults = sf.spec.faults;
+  s.tolerances = sf.spec.tolerances;
+  return s;
+}
+#endif
+
+/// The engine's integration step for the work bound [s]: the analytic plant's from the
+/// file; MuJoCo's from its model (loaded here, so that a missing or malformed model is
+/// an input error before any output is made; throws ex::JsonError naming plant.model).
+double plant_time_step(const ex::ScenarioFile& sf) {
+  if (sf.engine != "mujoco") return sf.spec.plant.time_step;
+#ifdef INHAND_SCENARIO_WITH_MUJOCO
+  try {
+    return md::load_model(mujoco_spec(sf).model_file)->opt.timestep;
+  } catch (const std::exception& e) {
+    throw ex::JsonError("plant.model", e.what());
+  }
+#else
+  throw ex::JsonError("plant.engine",
+                      "\"mujoco\": this inhand_scenario was built without MuJoCo (Debian: "
+                      "libmujoco-dev; docs/mujoco.md)");
+#endif
+}
+
+/// Runs the scenario on its plant, calling `observer` with every tick's record.
+template <class Observer>
+ip::ScenarioResult run_on_plant(const ex::ScenarioFile& sf, const Observer& observer) {
+#ifdef INHAND_SCENARIO_WITH_MUJOCO
+  if (sf.engine == "mujoco") {
+    const inhand::sim::ScenarioSpec<md::MujocoAdapter> spec = mujoco_spec(sf);
+    return inhand::sim::ScenarioRunner<md::MujocoAdapter>().run(spec, observer);
+  }
+#endif
+  return ip::ScenarioRunner().run(sf.spec, observer);
+}
+
 int run_scenario(const Options& o) {
   ex::ScenarioFile sf;
+  ip::ScenarioSpec sized;  // the spec with the engine's time step, for the work bound
   try {
-    sf = ex::load_scenario(o.files.front());
+    sf = ex::load_scenario(o.files.front());  // its messages name the file
+    sized = sf.spec;
+    try {
+      sized.plant.time_step = plant_time_step(sf);
+    } catch (const ex::JsonError& e) {
+      throw ex::JsonError(o.files.front(), e.what());
+    }
   } catch (const ex::JsonError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;
@@ -283,7 +348,7 @@ int run_scenario(const Options& o) {
     if (trace_path.empty()) trace_path = o.out_dir + "/trace.csv";
     if (summary_path.empty()) summary_path = o.out_dir + "/summary.json";
   }
-  const std::string too_much = work_bound_violation(o, spec, !trace_path.empty());
+  const std::string too_much = work_bound_violation(o, sized, !trace_path.empty());
   if (!too_much.empty()) {
     std::fprintf(stderr, "error: %s: %s\n", o.files.front().c_str(), too_much.c_str());
     return kExitBadInput;
@@ -348,7 +413,7 @@ int run_scenario(const Options& o) {
   try {
     ex::TraceRow<3> row;
     std::vector<double> stage_start(spec.stages.size(), -1.0);
-    ip::ScenarioRunner::TickObserver observer = [&](const ip::TickRecord& rec) {
+    auto observer = [&](const auto& rec) {
       const std::size_t si = static_cast<std::size_t>(rec.stage);
       if (stage_start[si] < 0.0) stage_start[si] = rec.time;
       force_layer.add(rec.stage, spec.stages[si].name, rec.time - stage_start[si], *rec.output);
@@ -357,7 +422,7 @@ int run_scenario(const Options& o) {
         trace->write(row);
       }
     };
-    result = ip::ScenarioRunner().run(spec, observer);
+    result = run_on_plant(sf, observer);
   } catch (const std::invalid_argument& e) {
     return fail(kExitBadInput, o.files.front() + ": invalid scenario: " + e.what());
   } catch (const std::exception& e) {
@@ -381,8 +446,8 @@ int run_scenario(const Options& o) {
   ex::remove_directory_on_signals(nullptr);
 
   if (!o.quiet) {
-    std::printf("scenario %s (%s hand, %zu stages): %.1f s simulated in %.2f s\n",
-                spec.name.c_str(), sf.hand_preset.c_str(), spec.stages.size(),
+    std::printf("scenario %s (%s hand, %s plant, %zu stages): %.1f s simulated in %.2f s\n",
+                spec.name.c_str(), sf.hand_preset.c_str(), sf.engine.c_str(), spec.stages.size(),
                 result.stages.empty() ? 0.0 : result.stages.back().end_time, wall);
     if (!sf.description.empty()) std::printf("  %s\n", sf.description.c_str());
     print_stage_table(summary);
@@ -413,7 +478,8 @@ int run_scenario(const Options& o) {
 int main(int argc, char** argv) {
   Options o;
   CLI::App app{
-      "Runs a scenario file on inhand's analytic 3-D plant and reports per-stage metrics."};
+      "Runs a scenario file on its plant (inhand's analytic 3-D plant, or MuJoCo) and reports "
+      "per-stage metrics."};
   app.add_option("files", o.files,
                  "scenario file (JSON); with --table: run summaries (summary.json) to tabulate")
       ->required();

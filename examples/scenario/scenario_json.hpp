@@ -42,7 +42,26 @@ struct FaultExpectation {
   std::optional<double> max_force_integral;
 };
 
+/// The MuJoCo plant of a scenario file ("plant": {"engine": "mujoco", ...}; docs/mujoco.md):
+/// the MJCF model and the settings of examples/mujoco's MujocoSetup, with its names and
+/// defaults (tests/mujoco holds them equal), kept free of MuJoCo's headers so that the
+/// format parses in a build without MuJoCo.
+struct MujocoPlantFile {
+  /// MJCF file: a name in the project's models/ folder, or a path (with a '/').
+  std::string model = "three_finger_cylinder.xml";
+  double position_gain = 30.0;      ///< 1/s, the hand servo's set-point gain
+  double friction = 0.0;            ///< object's and fingertips' sliding friction; 0: the model's
+  double torsional_friction = 0.0;  ///< m, on the object's geoms; 0: none (the model's)
+  double touch_threshold = 0.02;    ///< N, touching above this normal force
+  double object_mass = 0.0;         ///< kg ("object": {"mass"}); 0: the model's
+};
+
 struct ScenarioFile {
+  /// The plant: spec.hand, spec.object and spec.plant describe the analytic plant; with
+  /// engine "mujoco", `mujoco` describes the MuJoCo world (spec.hand is its hand preset,
+  /// spec.object.pose its nominal object pose; spec.plant is unused).
+  std::string engine = "analytic";
+  MujocoPlantFile mujoco;
   plant::ScenarioSpec spec;
   Expectations expect;
   std::vector<FaultExpectation> fault_expect;  ///< one per spec.faults entry
@@ -138,6 +157,33 @@ inline plant::PlantParams read_plant(ObjectReader r) {
       static_cast<std::uint64_t>(r.integer("seed", static_cast<long long>(p.seed), 0, (1LL << 53)));
   r.finish();
   return p;
+}
+
+inline MujocoPlantFile read_mujoco_plant(ObjectReader r) {
+  MujocoPlantFile p;
+  p.model = r.string("model", p.model);
+  if (p.model.empty() || p.model.size() > 4096)
+    throw JsonError(r.key_path("model"), "must have 1 to 4096 characters");
+  p.position_gain = r.number("position_gain", p.position_gain, Range::non_negative_up_to(1e4));
+  p.friction = r.number("friction", p.friction, Range::non_negative_up_to(10.0));
+  p.torsional_friction =
+      r.number("torsional_friction", p.torsional_friction, Range::non_negative_up_to(1.0));
+  p.touch_threshold =
+      r.number("touch_threshold", p.touch_threshold, Range::non_negative_up_to(100.0));
+  r.finish();
+  return p;
+}
+
+/// The object of a MuJoCo scenario is the model's: only its mass may be given.
+inline double read_mujoco_object_mass(ObjectReader r) {
+  for (const char* k : {"shape", "radius", "length", "size", "pose_offset"})
+    if (r.has(k))
+      throw JsonError(r.key_path(k),
+                      "the object of plant.engine \"mujoco\" is the model's (plant.model); "
+                      "only object.mass may be given");
+  const double m = r.number("mass", 0.0, Range::positive_up_to(100.0));
+  r.finish();
+  return m;
 }
 
 inline plant::HandController::Config read_controller(ObjectReader r) {
@@ -429,9 +475,22 @@ inline ScenarioFile parse_scenario(const Json& j) {
     s.hand = plant::shadow_like_coupled_hand();
   else
     s.hand = plant::shadow_like_hand();
-  if (!r.has("object")) throw JsonError("object", "required key is missing");
-  s.object = scenario_detail::read_object(r.object("object"), s.hand);
-  s.plant = scenario_detail::read_plant(r.object("plant"));
+  ObjectReader plant_reader = r.object("plant");
+  out.engine = plant_reader.choice("engine", "analytic", {"analytic", "mujoco"});
+  const bool mujoco = out.engine == "mujoco";
+  if (mujoco) {
+    if (out.hand_preset != "three_finger")
+      throw JsonError("hand", "plant.engine \"mujoco\" has the three_finger hand only, got \"" +
+                                  out.hand_preset + "\"");
+    out.mujoco = scenario_detail::read_mujoco_plant(plant_reader);
+    if (r.has("object"))
+      out.mujoco.object_mass = scenario_detail::read_mujoco_object_mass(r.object("object"));
+    s.object.pose = s.hand.object_pose;
+  } else {
+    if (!r.has("object")) throw JsonError("object", "required key is missing");
+    s.object = scenario_detail::read_object(r.object("object"), s.hand);
+    s.plant = scenario_detail::read_plant(plant_reader);
+  }
   s.controller = scenario_detail::read_controller(r.object("controller"));
   {
     ObjectReader t = r.object("tolerances");
@@ -479,10 +538,13 @@ inline ScenarioFile parse_scenario(const Json& j) {
   r.finish();
 
   // Cross-field checks of the plant and the controller, reported by key.
-  if (s.controller.control_period < s.plant.time_step)
-    throw JsonError("controller.control_period", "must be >= plant.time_step");
-  Validation v = plant::HandPlant::validate(s.hand.fingers, s.object, s.plant);
-  if (!v.ok()) throw JsonError(scenario_detail::plant_field_path(v.field), v.reason);
+  Validation v;
+  if (!mujoco) {  // (MuJoCo's model is checked when it is loaded, before the run)
+    if (s.controller.control_period < s.plant.time_step)
+      throw JsonError("controller.control_period", "must be >= plant.time_step");
+    v = plant::HandPlant::validate(s.hand.fingers, s.object, s.plant);
+    if (!v.ok()) throw JsonError(scenario_detail::plant_field_path(v.field), v.reason);
+  }
   v = plant::HandController::validate(plant::controller_config_for(s.hand, s.controller));
   if (!v.ok()) throw JsonError(scenario_detail::controller_field_path(v.field), v.reason);
   return out;

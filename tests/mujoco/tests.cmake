@@ -7,6 +7,10 @@
 #   mujoco_cylinder    the paper's cylinder translation in closed loop on the MJCF hand
 #                      (the case with the paper's bounds is disabled: the grasp does not
 #                      complete on MuJoCo yet; the file gives the figures)
+#   mujoco_scenario_file  the scenario file's MuJoCo settings (plant.engine "mujoco") have
+#                      the adapter's defaults; only with the scenario-file parser
+#                      (nlohmann-json). The files themselves run as scenario.mujoco.* tests
+#                      (tests/scenarios/tests.cmake)
 #   mujoco_urdf        MuJoCo's URDF import of models/urdf/*.urdf against inhand::urdf
 #                      reading the same files (fingertip positions, random configurations);
 #                      only where inhand::urdf exists (urdfdom found)
@@ -28,5 +32,16 @@ if(mujoco_FOUND AND GTest_FOUND)
   endforeach()
   if(TARGET inhand::urdf)
     target_link_libraries(mujoco_urdf PRIVATE inhand::urdf)
+  endif()
+  if(nlohmann_json_FOUND)
+    add_executable(mujoco_scenario_file ${CMAKE_CURRENT_LIST_DIR}/mujoco_scenario_file.cpp)
+    target_include_directories(mujoco_scenario_file PRIVATE ${PROJECT_SOURCE_DIR}/examples
+      ${PROJECT_SOURCE_DIR}/examples/scenario ${PROJECT_SOURCE_DIR}/examples/mujoco)
+    target_compile_definitions(mujoco_scenario_file PRIVATE
+      INHAND_MODELS_DIR="${PROJECT_SOURCE_DIR}/models")
+    target_link_libraries(mujoco_scenario_file PRIVATE inhand::sim mujoco::mujoco
+      nlohmann_json::nlohmann_json inhand_warnings GTest::gtest GTest::gtest_main)
+    gtest_discover_tests(mujoco_scenario_file DISCOVERY_TIMEOUT 60 TEST_PREFIX mujoco.
+                         PROPERTIES LABELS mujoco TIMEOUT 60)
   endif()
 endif()

@@ -416,6 +416,7 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
                 .norm(),
             1e-15);
   // Plant defaults.
+  EXPECT_EQ(f.engine, "analytic");
   const ip::PlantParams d = ip::default_plant_params();
   const ip::PlantParams& p = got.plant;
   EXPECT_EQ(p.time_step, d.time_step);
@@ -854,6 +855,89 @@ TEST(ScenarioJson, LoadScenarioPrefixesTheFileName) {
   } catch (const ex::JsonError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/scenario.json"), std::string::npos);
   }
+}
+
+void expect_contains(const std::string& message, const std::string& part) {
+  EXPECT_NE(message.find(part), std::string::npos) << "message: " << message;
+}
+
+// plant.engine "mujoco": the MuJoCo settings are read with their defaults (those of
+// examples/mujoco's MujocoSetup, held equal by tests/mujoco/mujoco_scenario_file.cpp), the
+// object is the model's (its mass alone may be given), the hand is the three-finger one,
+// and the analytic plant's keys are refused there.
+TEST(ScenarioJson, MujocoEngineSettings) {
+  Json j = base_scenario();
+  j["hand"] = "three_finger";
+  j.erase("object");
+  j["plant"] = {{"engine", "mujoco"}};
+  ex::ScenarioFile f = ex::parse_scenario(j);
+  EXPECT_EQ(f.engine, "mujoco");
+  EXPECT_EQ(f.mujoco.model, "three_finger_cylinder.xml");
+  EXPECT_EQ(f.mujoco.position_gain, 30.0);
+  EXPECT_EQ(f.mujoco.friction, 0.0);
+  EXPECT_EQ(f.mujoco.torsional_friction, 0.0);
+  EXPECT_EQ(f.mujoco.touch_threshold, 0.02);
+  EXPECT_EQ(f.mujoco.object_mass, 0.0);
+  EXPECT_EQ(f.spec.object.pose.position, f.spec.hand.object_pose.position);
+
+  j["plant"] = {{"engine", "mujoco"}, {"model", "/tmp/other.xml"},   {"position_gain", 50.0},
+                {"friction", 0.5},    {"torsional_friction", 0.002}, {"touch_threshold", 0.05}};
+  j["object"] = {{"mass", 0.2}};
+  f = ex::parse_scenario(j);
+  EXPECT_EQ(f.mujoco.model, "/tmp/other.xml");
+  EXPECT_EQ(f.mujoco.position_gain, 50.0);
+  EXPECT_EQ(f.mujoco.friction, 0.5);
+  EXPECT_EQ(f.mujoco.torsional_friction, 0.002);
+  EXPECT_EQ(f.mujoco.touch_threshold, 0.05);
+  EXPECT_EQ(f.mujoco.object_mass, 0.2);
+
+  EXPECT_EQ(ex::parse_scenario(base_scenario()).engine, "analytic");
+
+  auto error_with = [](const std::function<void(Json&)>& change) {
+    Json k = base_scenario();
+    k["hand"] = "three_finger";
+    k.erase("object");
+    k["plant"] = {{"engine", "mujoco"}};
+    change(k);
+    return parse_error(k);
+  };
+  expect_contains(error_with([](Json& k) { k["hand"] = "shadow_like"; }),
+                  "hand: plant.engine \"mujoco\" has the three_finger hand only");
+  expect_contains(error_with([](Json& k) {
+                    k["object"] = {{"shape", "box"}};
+                  }),
+                  "object.shape: the object of plant.engine \"mujoco\" is the model's");
+  expect_contains(error_with([](Json& k) {
+                    k["object"] = {{"mass", -1.0}};
+                  }),
+                  "object.mass: must be a number in");
+  expect_contains(error_with([](Json& k) { k["plant"]["normal_stiffness"] = 1000.0; }),
+                  "plant.normal_stiffness: unknown key");
+  expect_contains(error_with([](Json& k) { k["plant"]["friction"] = -0.1; }),
+                  "plant.friction: must be a number in");
+  expect_contains(error_with([](Json& k) { k["plant"]["torsional_friction"] = 2.0; }),
+                  "plant.torsional_friction: must be a number in");
+  expect_contains(error_with([](Json& k) { k["plant"]["model"] = ""; }),
+                  "plant.model: must have 1 to 4096 characters");
+  expect_contains(error_with([](Json& k) { k["plant"]["engine"] = "bullet"; }),
+                  "plant.engine: must be one of");
+  // The analytic plant refuses the MuJoCo settings.
+  Json k = base_scenario();
+  k["plant"] = {{"position_gain", 30.0}};
+  expect_contains(parse_error(k), "plant.position_gain: unknown key");
+}
+
+// Every shipped MuJoCo scenario file parses (whether or not this build runs them).
+TEST(ScenarioJson, MujocoFilesParse) {
+  int count = 0;
+  for (const auto& e : std::filesystem::directory_iterator(kScenarioDir + "/mujoco")) {
+    SCOPED_TRACE(e.path().string());
+    const ex::ScenarioFile f = ex::load_scenario(e.path().string());
+    EXPECT_EQ(f.engine, "mujoco");
+    EXPECT_EQ(f.hand_preset, "three_finger");
+    ++count;
+  }
+  EXPECT_GE(count, 10);
 }
 
 // ---------------------------------------------------------------------------

@@ -4,7 +4,8 @@
 #       by the *_test.cpp glob because it needs nlohmann-json)
 #   scenario.<dir>.<name>   one per shipped scenario file: inhand_scenario <file> --check
 #       --quiet --summary <build>/scenario-<name>.summary.json (fails when an expectation is
-#       violated; no trace, see below)
+#       violated; no trace, see below); those of scenarios/mujoco/ (plant.engine "mujoco")
+#       only with MuJoCo, labelled mujoco as well
 #   scenario_cli.*          exit status, messages and (absence of) output files of
 #       inhand_scenario for a violated expectation, a truncated and an invalid file,
 #       output paths that name a FIFO, a symbolic link or a directory, runs killed by
@@ -40,6 +41,10 @@ if(INHAND_HAVE_SCENARIO_RUNNER)
       message(FATAL_ERROR "two scenario files are named ${name}.json; their outputs would collide")
     endif()
     list(APPEND seen_names ${name})
+    # scenarios/mujoco/: plant.engine "mujoco", run only where the runner has MuJoCo.
+    if(group STREQUAL "mujoco" AND NOT mujoco_FOUND)
+      continue()
+    endif()
     # The summary only: the expectations are checked from the run itself, and the
     # trace of a long scenario (600 s: 600 000 rows) would exceed --max-trace-rows.
     add_test(NAME scenario.${group}.${name}
@@ -48,6 +53,9 @@ if(INHAND_HAVE_SCENARIO_RUNNER)
     # over 2 minutes under the sanitizers, whose stage leaves them out; the 120 s hold
     # of tests/sim/force_layer_plant_test.cpp covers the same path there).
     set(labels scenario)
+    if(group STREQUAL "mujoco")
+      list(APPEND labels mujoco)
+    endif()
     if(name MATCHES "_600s$")
       list(APPEND labels long)
     endif()
@@ -71,6 +79,17 @@ if(INHAND_HAVE_SCENARIO_RUNNER)
   inhand_scenario_cli_test(truncated_file truncated.json
     -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=truncated.json: object: malformed JSON.*end of input"
     -DEXPECT_FILES=OFF)
+  # plant.engine "mujoco": a model that cannot be loaded is an input error before the run;
+  # a runner built without MuJoCo refuses the file, saying so.
+  if(mujoco_FOUND)
+    inhand_scenario_cli_test(mujoco_missing_model mujoco_missing_model.json
+      -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=mujoco_missing_model.json: plant.model: mujoco: cannot load .*no_such_model.xml"
+      -DEXPECT_FILES=OFF)
+  else()
+    inhand_scenario_cli_test(mujoco_missing_model mujoco_missing_model.json
+      -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=mujoco_missing_model.json: plant.engine: .mujoco.: this inhand_scenario was built without MuJoCo"
+      -DEXPECT_FILES=OFF)
+  endif()
   inhand_scenario_cli_test(invalid_value invalid_value.json
     -DEXPECT_EXIT=2 "-DEXPECT_OUTPUT=invalid_value.json: object.mass: must be a number in \\(0, 100., got -1"
     -DEXPECT_FILES=OFF)
