@@ -282,6 +282,8 @@ inhand::sim::ScenarioSpec<md::MujocoAdapter> mujoco_spec(const ex::ScenarioFile&
   const ex::MujocoPlantFile& p = sf.mujoco;
   s.model_file = p.model.find('/') == std::string::npos ? md::model_path(p.model) : p.model;
   s.hand = sf.spec.hand;
+  s.fingers.clear();  // the models' naming (models/*.xml): palm, <finger>_tip
+  for (const std::string& name : s.hand.finger_names) s.fingers.push_back({"palm", name + "_tip"});
   s.position_gain = p.position_gain;
   s.friction = p.friction;
   s.torsional_friction = p.torsional_friction;

@@ -47,7 +47,11 @@ struct FaultExpectation {
 /// defaults (tests/mujoco holds them equal), kept free of MuJoCo's headers so that the
 /// format parses in a build without MuJoCo.
 struct MujocoPlantFile {
-  /// MJCF file: a name in the project's models/ folder, or a path (with a '/').
+  /// MJCF file: a name in the project's models/ folder, or a path (with a '/'). A file
+  /// that does not name one gets "<hand>_cylinder.xml" (the hand's cylinder scene); the
+  /// default here is the three-finger hand's, as MujocoSetup's. Its hand must be the
+  /// file's hand preset, with a body "palm", per finger a tip geom "<finger>_tip", a body
+  /// "object" with a free joint and a weld "object_hold" (models/*.xml).
   std::string model = "three_finger_cylinder.xml";
   double position_gain = 30.0;      ///< 1/s, the hand servo's set-point gain
   double friction = 0.0;            ///< object's and fingertips' sliding friction; 0: the model's
@@ -159,9 +163,11 @@ inline plant::PlantParams read_plant(ObjectReader r) {
   return p;
 }
 
-inline MujocoPlantFile read_mujoco_plant(ObjectReader r) {
+/// `hand`: the file's hand preset, whose cylinder scene (models/<hand>_cylinder.xml) is
+/// the default model.
+inline MujocoPlantFile read_mujoco_plant(ObjectReader r, const std::string& hand) {
   MujocoPlantFile p;
-  p.model = r.string("model", p.model);
+  p.model = r.string("model", hand + "_cylinder.xml");
   if (p.model.empty() || p.model.size() > 4096)
     throw JsonError(r.key_path("model"), "must have 1 to 4096 characters");
   p.position_gain = r.number("position_gain", p.position_gain, Range::non_negative_up_to(1e4));
@@ -479,10 +485,12 @@ inline ScenarioFile parse_scenario(const Json& j) {
   out.engine = plant_reader.choice("engine", "analytic", {"analytic", "mujoco"});
   const bool mujoco = out.engine == "mujoco";
   if (mujoco) {
-    if (out.hand_preset != "three_finger")
-      throw JsonError("hand", "plant.engine \"mujoco\" has the three_finger hand only, got \"" +
-                                  out.hand_preset + "\"");
-    out.mujoco = scenario_detail::read_mujoco_plant(plant_reader);
+    if (out.hand_preset != "three_finger" && out.hand_preset != "shadow_like")
+      throw JsonError("hand",
+                      "plant.engine \"mujoco\" has the three_finger and shadow_like "
+                      "hands (models/), got \"" +
+                          out.hand_preset + "\"");
+    out.mujoco = scenario_detail::read_mujoco_plant(plant_reader, out.hand_preset);
     if (r.has("object"))
       out.mujoco.object_mass = scenario_detail::read_mujoco_object_mass(r.object("object"));
     s.object.pose = s.hand.object_pose;

@@ -1,10 +1,15 @@
-// The finger chains read from the compiled MJCF three-finger hand (examples/mujoco/
-// mujoco_chains.hpp) against MuJoCo's own kinematics, and against the preset the model
-// was written from (include/inhand/sim/presets.hpp). Units: metres, radians.
+// The finger chains read from the compiled MJCF hands (examples/mujoco/mujoco_chains.hpp)
+// against MuJoCo's own kinematics, and against the presets the models were written from
+// (include/inhand/sim/presets.hpp): the three-finger hand (models/three_finger_cylinder.xml)
+// and the Shadow-like hand with either paper object (models/shadow_like_cylinder.xml,
+// models/shadow_like_box.xml). Units: metres, radians.
 #include "mujoco_chains.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <ostream>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,22 +24,43 @@ namespace {
 using inhand::mujoco_demo::FingerNames;
 using inhand::mujoco_demo::MujocoChain;
 
-const std::vector<FingerNames> kFingers = {
-    {"palm", "left_tip"}, {"palm", "right_tip"}, {"palm", "thumb_tip"}};
+/// An MJCF hand with its object and the preset it was written from.
+struct HandModel {
+  const char* name;  ///< the ctest name's suffix and the prefix of the recorded figures
+  const char* file;  ///< in models/
+  inhand::plant::HandPreset (*preset)();
+};
+
+const HandModel kHandModels[] = {
+    {"three_finger", "three_finger_cylinder.xml", &inhand::plant::three_finger_hand},
+    {"shadow_like", "shadow_like_cylinder.xml", &inhand::plant::shadow_like_hand},
+    {"shadow_like_box", "shadow_like_box.xml", &inhand::plant::shadow_like_hand},
+};
+
+/// The preset's fingers in its order, as the models name them: {"palm", "<finger>_tip"}.
+std::vector<FingerNames> finger_names(const inhand::plant::HandPreset& preset) {
+  std::vector<FingerNames> names;
+  for (const std::string& f : preset.finger_names) names.push_back({"palm", f + "_tip"});
+  return names;
+}
 
 struct Hand {
-  explicit Hand(
-      const std::string& path = inhand::mujoco_demo::model_path("three_finger_cylinder.xml"),
-      std::vector<FingerNames> names = kFingers)
+  Hand(const std::string& path, std::vector<FingerNames> names)
       : fingers(std::move(names)),
         model(inhand::mujoco_demo::load_model(path)),
         data(inhand::mujoco_demo::make_data(model.get())),
         chains(inhand::mujoco_demo::finger_chains(model.get(), fingers)) {}
+  explicit Hand(const HandModel& hand)
+      : Hand(inhand::mujoco_demo::model_path(hand.file), finger_names(hand.preset())) {}
   std::vector<FingerNames> fingers;
   inhand::mujoco_demo::ModelPtr model;
   inhand::mujoco_demo::DataPtr data;
   std::vector<MujocoChain> chains;
 };
+
+void PrintTo(const HandModel& hand, std::ostream* os) { *os << hand.name; }
+
+class MujocoChains : public ::testing::TestWithParam<HandModel> {};
 
 MujocoChain::JointVector random_angles(inhand_test::Rng& rng, const MujocoChain& c) {
   MujocoChain::JointVector q(c.dof());
@@ -43,9 +69,12 @@ MujocoChain::JointVector random_angles(inhand_test::Rng& rng, const MujocoChain&
   return q;
 }
 
-TEST(MujocoChains, ReadFromTheModelAsThePresetStatesThem) {
-  const Hand h;
-  const auto preset = inhand::plant::three_finger_hand();
+// Every chain read from the model is the preset's finger: the same number of joints, limits
+// to 1e-12 rad, velocity limits and fingertip radius exactly, and fingertip positions to
+// 1e-12 m at random joint angles within the limits.
+TEST_P(MujocoChains, ReadFromTheModelAsThePresetStatesThem) {
+  const Hand h(GetParam());
+  const auto preset = GetParam().preset();
   ASSERT_EQ(h.chains.size(), preset.fingers.size());
   inhand_test::Rng rng = inhand_test::make_rng(20261201);
   double worst = 0.0;
@@ -69,11 +98,13 @@ TEST(MujocoChains, ReadFromTheModelAsThePresetStatesThem) {
       worst = std::max(worst, (wc.fingertip.position - wp.fingertip.position).norm());
     }
   }
-  inhand_test::record("max_tip_distance_to_preset_m", worst);
+  inhand_test::record(std::string(GetParam().name) + "_max_tip_distance_to_preset_m", worst);
   EXPECT_LT(worst, 1e-12);
 }
 
-/// Largest differences between the chains and MuJoCo over `count` random configurations.
+/// Largest differences between the chains and MuJoCo over `count` random configurations:
+/// fingertip position against geom_xpos, rotation against geom_xmat and the point
+/// Jacobian of a point on the fingertip sphere against mj_jac, each within 1e-9.
 void expect_agreement(Hand& h, const char* what) {
   const mjModel* m = h.model.get();
   mjData* d = h.data.get();
@@ -127,12 +158,54 @@ void expect_agreement(Hand& h, const char* what) {
   EXPECT_LT(worst_jac, 1e-9);
 }
 
-TEST(MujocoChains, ForwardKinematicsAndJacobianAgreeWithMujoco) {
-  Hand h;
-  expect_agreement(h, "three_finger");
+TEST_P(MujocoChains, ForwardKinematicsAndJacobianAgreeWithMujoco) {
+  Hand h(GetParam());
+  expect_agreement(h, GetParam().name);
 }
 
-TEST(MujocoChains, TurnedFramesOffsetAnchorsAndGeneralAxesAgreeWithMujoco) {
+// At the preset's open configuration, with the object held at its nominal pose (the weld
+// object_hold on), MuJoCo finds no contact at all: no hand geom touches or penetrates the
+// object (geom margins are 0, so any contact is a touch) and no finger touches another.
+// Recorded: the smallest hand-object distance, as MuJoCo's collision reports it with a
+// 50 mm margin on every geom.
+TEST_P(MujocoChains, OpenConfigurationLeavesTheObjectClear) {
+  Hand h(GetParam());
+  const auto preset = GetParam().preset();
+  mjModel* m = h.model.get();
+  mjData* d = h.data.get();
+  for (std::size_t i = 0; i < h.fingers.size(); ++i) {
+    const std::vector<int> adr = inhand::mujoco_demo::finger_qpos_addresses(m, h.fingers[i]);
+    ASSERT_EQ(static_cast<Eigen::Index>(adr.size()), preset.open_configuration[i].size());
+    for (std::size_t j = 0; j < adr.size(); ++j)
+      d->qpos[adr[j]] = preset.open_configuration[i](static_cast<Eigen::Index>(j));
+  }
+  const int hold = mj_name2id(m, mjOBJ_EQUALITY, "object_hold");
+  const int object = mj_name2id(m, mjOBJ_GEOM, "object_geom");
+  ASSERT_GE(hold, 0);
+  ASSERT_GE(object, 0);
+  m->eq_active[hold] = 1;
+  mj_forward(m, d);
+  std::ostringstream contacts;
+  for (int c = 0; c < d->ncon; ++c)
+    contacts << " " << mj_id2name(m, mjOBJ_GEOM, d->contact[c].geom1) << "-"
+             << mj_id2name(m, mjOBJ_GEOM, d->contact[c].geom2) << " (" << d->contact[c].dist
+             << " m)";
+  EXPECT_EQ(d->ncon, 0) << "contacts:" << contacts.str();
+  for (int g = 0; g < m->ngeom; ++g) m->geom_margin[g] = 0.05;
+  mj_forward(m, d);
+  double clearance = 0.05;
+  for (int c = 0; c < d->ncon; ++c)
+    if (d->contact[c].geom1 == object || d->contact[c].geom2 == object)
+      clearance = std::min(clearance, static_cast<double>(d->contact[c].dist));
+  inhand_test::record(std::string(GetParam().name) + "_open_min_clearance_to_object_m", clearance);
+  EXPECT_GT(clearance, 0.0);
+}
+
+// gtest numbers the cases (Hands/MujocoChains.<test>/0, 1, 2); ctest names them by the
+// printed parameter (mujoco.Hands/MujocoChains.<test>/three_finger, ...).
+INSTANTIATE_TEST_SUITE_P(Hands, MujocoChains, ::testing::ValuesIn(kHandModels));
+
+TEST(MujocoChainsTwistedFinger, TurnedFramesOffsetAnchorsAndGeneralAxesAgreeWithMujoco) {
   Hand h(std::string(INHAND_TEST_DATA_DIR) + "/twisted_finger.xml", {{"palm", "tip"}});
   const MujocoChain& c = h.chains[0];
   ASSERT_TRUE(c.validate().ok()) << c.validate().field;

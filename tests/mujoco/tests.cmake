@@ -2,8 +2,10 @@
 # are built here rather than by the *_test.cpp glob of tests/CMakeLists.txt (which links
 # only inhand and GoogleTest); the file names avoid that glob. Skipped without MuJoCo or
 # GoogleTest (cmake/inhandOptionalPackages.cmake says which is missing). Label mujoco.
-#   mujoco_chains      the chains read from the compiled model against MuJoCo's own
+#   mujoco_chains      the chains read from the compiled models (three-finger and
+#                      Shadow-like hands, cylinder and box scenes) against MuJoCo's own
 #                      kinematics (fingertip positions and Jacobians, random configurations)
+#                      and the presets; the open hand clear of the object
 #   mujoco_cylinder    the paper's cylinder translation in closed loop on the MJCF hand
 #                      (the case with the paper's bounds is disabled: the grasp does not
 #                      complete on MuJoCo yet; the file gives the figures)

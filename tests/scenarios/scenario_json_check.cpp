@@ -901,8 +901,14 @@ TEST(ScenarioJson, MujocoEngineSettings) {
     change(k);
     return parse_error(k);
   };
-  expect_contains(error_with([](Json& k) { k["hand"] = "shadow_like"; }),
-                  "hand: plant.engine \"mujoco\" has the three_finger hand only");
+  expect_contains(error_with([](Json& k) { k["hand"] = "allegro_like"; }),
+                  "hand: plant.engine \"mujoco\" has the three_finger and shadow_like hands");
+  {  // the Shadow-like hand's default model is its cylinder scene
+    Json k = base_scenario();
+    k.erase("object");
+    k["plant"] = {{"engine", "mujoco"}};
+    EXPECT_EQ(ex::parse_scenario(k).mujoco.model, "shadow_like_cylinder.xml");
+  }
   expect_contains(error_with([](Json& k) {
                     k["object"] = {{"shape", "box"}};
                   }),
