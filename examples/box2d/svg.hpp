@@ -1,104 +1,23 @@
-// A small SVG writer (plain text, no library) and the scene snapshot of the planar Box2D
-// demo: finger links as thick lines, fingertip pads as circles, the object's outline
-// (solid: actual pose; dashed: desired pose; a radius marks the body x axis), contact
+// The scene snapshot of the planar Box2D demo, drawn with examples/common/svg_writer.hpp:
+// finger links as thick lines, fingertip pads as circles, the object's outline (solid:
+// actual pose; dashed: desired pose; a radius marks the body x axis), contact
 // points and the object's outward contact normals as the controller senses them (arrows
 // of kNormalArrow u per N). World coordinates in u (planar_world.hpp), y up; the writer
 // flips y for SVG.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
-#include <stdexcept>
 #include <string>
+#include <vector>
 
+#include "common/svg_writer.hpp"
 #include "planar_scenario.hpp"
 
 namespace inhand::box2d_demo {
 
-class SvgWriter {
- public:
-  /// A drawing of the world window [x0, x1] x [y0, y1] (u) at `px_per_unit`.
-  SvgWriter(double x0, double y0, double x1, double y1, double px_per_unit)
-      : x0_(x0), y1_(y1), s_(px_per_unit) {
-    const double w = (x1 - x0) * s_, h = (y1 - y0) * s_;
-    out_ << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-         << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << fmt(w) << "\" height=\""
-         << fmt(h) << "\" viewBox=\"0 0 " << fmt(w) << ' ' << fmt(h) << "\">\n"
-         << "<rect x=\"0\" y=\"0\" width=\"" << fmt(w) << "\" height=\"" << fmt(h)
-         << "\" fill=\"white\"/>\n";
-  }
-
-  void line(const Vec2& a, const Vec2& b, const std::string& stroke, double width_px,
-            const std::string& extra = "") {
-    out_ << "<line x1=\"" << fmt(px(a)) << "\" y1=\"" << fmt(py(a)) << "\" x2=\"" << fmt(px(b))
-         << "\" y2=\"" << fmt(py(b)) << "\" stroke=\"" << stroke << "\" stroke-width=\""
-         << fmt(width_px) << "\" stroke-linecap=\"round\"" << extra << "/>\n";
-  }
-  void circle(const Vec2& c, double radius_u, const std::string& fill, const std::string& stroke,
-              double width_px, const std::string& extra = "") {
-    out_ << "<circle cx=\"" << fmt(px(c)) << "\" cy=\"" << fmt(py(c)) << "\" r=\""
-         << fmt(radius_u * s_) << "\" fill=\"" << fill << "\" stroke=\"" << stroke
-         << "\" stroke-width=\"" << fmt(width_px) << '"' << extra << "/>\n";
-  }
-  template <typename Points>
-  void polygon(const Points& pts, const std::string& fill, const std::string& stroke,
-               double width_px, const std::string& extra = "") {
-    out_ << "<polygon points=\"";
-    for (const Vec2& p : pts) out_ << fmt(px(p)) << ',' << fmt(py(p)) << ' ';
-    out_ << "\" fill=\"" << fill << "\" stroke=\"" << stroke << "\" stroke-width=\""
-         << fmt(width_px) << '"' << extra << "/>\n";
-  }
-  /// Arrow from `a` to `b` with a small head.
-  void arrow(const Vec2& a, const Vec2& b, const std::string& stroke, double width_px) {
-    line(a, b, stroke, width_px);
-    const Vec2 d = b - a;
-    const double len = d.norm();
-    if (len <= 0.0) return;
-    const Vec2 u = d / len, n(-u.y(), u.x());
-    const double head = std::min(0.3, 0.4 * len);
-    line(b, Vec2(b - head * u + 0.5 * head * n), stroke, width_px);
-    line(b, Vec2(b - head * u - 0.5 * head * n), stroke, width_px);
-  }
-  void text(const Vec2& at, const std::string& s, double size_px,
-            const std::string& fill = "black") {
-    out_ << "<text x=\"" << fmt(px(at)) << "\" y=\"" << fmt(py(at))
-         << "\" font-family=\"sans-serif\" font-size=\"" << fmt(size_px) << "\" fill=\"" << fill
-         << "\">" << escape(s) << "</text>\n";
-  }
-  std::string str() const { return out_.str() + "</svg>\n"; }
-  void save(const std::string& path) const {
-    std::ofstream f(path);
-    if (!f) throw std::runtime_error("cannot write " + path);
-    f << str();
-  }
-
- private:
-  double px(const Vec2& p) const { return (p.x() - x0_) * s_; }
-  double py(const Vec2& p) const { return (y1_ - p.y()) * s_; }
-  static std::string fmt(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.2f", v);
-    return b;
-  }
-  static std::string escape(const std::string& s) {
-    std::string o;
-    for (char c : s) {
-      if (c == '<')
-        o += "&lt;";
-      else if (c == '>')
-        o += "&gt;";
-      else if (c == '&')
-        o += "&amp;";
-      else
-        o += c;
-    }
-    return o;
-  }
-  double x0_, y1_, s_;
-  std::ostringstream out_;
-};
+using SvgWriter = inhand::examples::SvgWriter;
 
 /// Length of a drawn normal: this many u per N of sensed normal force, at least 0.8 u.
 constexpr double kNormalArrow = 1.5;

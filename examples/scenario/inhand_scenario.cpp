@@ -6,7 +6,8 @@
 //                   [--check] [--quiet] [--max-plant-steps N] [--max-trace-rows N]
 //   inhand_scenario --table SUMMARY.json... [--check]
 //
-// --out DIR writes DIR/trace.csv and DIR/summary.json (DIR is created); --trace and
+// --out DIR writes DIR/trace.csv, DIR/summary.json and the pictures of the scene
+// DIR/scene_{grasped,mid,end}.svg (scene_pictures.hpp; DIR is created); --trace and
 // --summary name the files explicitly (and override --out for that file). Every output
 // path is checked, and every temporary output file (next to its target) created, before
 // the simulation starts; the files are renamed onto their targets only when all are
@@ -47,6 +48,7 @@
 #include "common/summary_json.hpp"
 #include "common/trace_csv.hpp"
 #include "scenario_json.hpp"
+#include "scene_pictures.hpp"
 #ifdef INHAND_SCENARIO_WITH_MUJOCO
 #include "mujoco_adapter.hpp"
 #endif
@@ -298,17 +300,53 @@ inhand::sim::ScenarioSpec<md::MujocoAdapter> mujoco_spec(const ex::ScenarioFile&
 }
 #endif
 
-/// The engine's integration step for the work bound [s]: the analytic plant's from the
-/// file; MuJoCo's from its model (loaded here, so that a missing or malformed model is
-/// an input error before any output is made; throws ex::JsonError naming plant.model).
-double plant_time_step(const ex::ScenarioFile& sf) {
-  if (sf.engine != "mujoco") return sf.spec.plant.time_step;
+/// What the run needs of its plant before it starts: the integration step (for the work
+/// bound), and the finger chains and object shape the pictures draw.
+struct PlantGeometry {
+  double time_step = 0.0;  ///< s
+  std::vector<ip::PlantFinger> chains;
+  ip::ObjectShape object;
+};
+
+#ifdef INHAND_SCENARIO_WITH_MUJOCO
+/// The shape of the model's object: its body's first geom (cylinder, box or sphere).
+ip::ObjectShape mujoco_object_shape(const mjModel* m, const std::string& body) {
+  const int b = mj_name2id(m, mjOBJ_BODY, body.c_str());
+  for (int g = 0; b >= 0 && g < m->ngeom; ++g) {
+    if (m->geom_bodyid[g] != b) continue;
+    const mjtNum* size = m->geom_size + 3 * g;
+    if (m->geom_type[g] == mjGEOM_CYLINDER) return ip::ObjectShape::cylinder(size[0], size[1]);
+    if (m->geom_type[g] == mjGEOM_BOX) return ip::ObjectShape::box(size[0], size[1], size[2]);
+    if (m->geom_type[g] == mjGEOM_SPHERE) return ip::ObjectShape::sphere(size[0]);
+  }
+  throw ex::JsonError("plant.model", "body " + body + " has no cylinder, box or sphere geom");
+}
+#endif
+
+/// The plant's geometry: the analytic plant's from the file; MuJoCo's from its model
+/// (loaded here, so that a missing or malformed model is an input error before any output
+/// is made; throws ex::JsonError naming plant.model).
+PlantGeometry plant_geometry(const ex::ScenarioFile& sf) {
+  PlantGeometry g;
+  if (sf.engine != "mujoco") {
+    g.time_step = sf.spec.plant.time_step;
+    g.chains = sf.spec.hand.fingers;
+    g.object = sf.spec.object.shape;
+    return g;
+  }
 #ifdef INHAND_SCENARIO_WITH_MUJOCO
   try {
-    return md::load_model(mujoco_spec(sf).model_file)->opt.timestep;
+    const inhand::sim::ScenarioSpec<md::MujocoAdapter> spec = mujoco_spec(sf);
+    const md::ModelPtr model = md::load_model(spec.model_file);
+    g.time_step = model->opt.timestep;
+    g.chains = md::finger_chains(model.get(), spec.fingers);
+    g.object = mujoco_object_shape(model.get(), spec.object_body);
+  } catch (const ex::JsonError&) {
+    throw;
   } catch (const std::exception& e) {
     throw ex::JsonError("plant.model", e.what());
   }
+  return g;
 #else
   throw ex::JsonError("plant.engine",
                       "\"mujoco\": this inhand_scenario was built without MuJoCo (Debian: "
@@ -331,14 +369,16 @@ ip::ScenarioResult run_on_plant(const ex::ScenarioFile& sf, const Observer& obse
 int run_scenario(const Options& o) {
   ex::ScenarioFile sf;
   ip::ScenarioSpec sized;  // the spec with the engine's time step, for the work bound
+  PlantGeometry geometry;
   try {
     sf = ex::load_scenario(o.files.front());  // its messages name the file
     sized = sf.spec;
     try {
-      sized.plant.time_step = plant_time_step(sf);
+      geometry = plant_geometry(sf);
     } catch (const ex::JsonError& e) {
       throw ex::JsonError(o.files.front(), e.what());
     }
+    sized.plant.time_step = geometry.time_step;
   } catch (const ex::JsonError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;
@@ -346,9 +386,12 @@ int run_scenario(const Options& o) {
   const ip::ScenarioSpec& spec = sf.spec;
 
   std::string trace_path = o.trace, summary_path = o.summary;
+  std::vector<std::string> scene_paths;  // --out only: the pictures (scene_pictures.hpp)
   if (!o.out_dir.empty()) {
     if (trace_path.empty()) trace_path = o.out_dir + "/trace.csv";
     if (summary_path.empty()) summary_path = o.out_dir + "/summary.json";
+    for (const char* instant : {"grasped", "mid", "end"})
+      scene_paths.push_back(o.out_dir + "/scene_" + instant + ".svg");
   }
   const std::string too_much = work_bound_violation(o, sized, !trace_path.empty());
   if (!too_much.empty()) {
@@ -366,6 +409,7 @@ int run_scenario(const Options& o) {
     }
     for (const std::string* p : {&trace_path, &summary_path})
       if (!p->empty()) ex::check_output_target(*p);
+    for (const std::string& p : scene_paths) ex::check_output_target(p);
   } catch (const ex::OutputTargetError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;
@@ -378,11 +422,12 @@ int run_scenario(const Options& o) {
     std::error_code ec;
     if (created_out_dir) std::filesystem::remove(o.out_dir, ec);  // only if empty
   };
-  // Both temporary files exist before the run (so an output that cannot be created
-  // fails it early), both are complete before either is renamed, and a failure or a
+  // Every temporary file exists before the run (so an output that cannot be created
+  // fails it early), all are complete before any is renamed, and a failure or a
   // termination signal removes them.
   std::unique_ptr<ex::TraceCsvWriter<3>> trace;
   std::unique_ptr<ex::AtomicFile> summary_file;
+  std::vector<std::unique_ptr<ex::AtomicFile>> scene_files;
   try {
     if (!o.out_dir.empty()) created_out_dir = std::filesystem::create_directories(o.out_dir);
     if (created_out_dir) ex::remove_directory_on_signals(o.out_dir.c_str());
@@ -390,9 +435,12 @@ int run_scenario(const Options& o) {
       trace = std::make_unique<ex::TraceCsvWriter<3>>(trace_path, spec.hand.finger_names,
                                                       spec.object.pose.rotation);
     if (!summary_path.empty()) summary_file = std::make_unique<ex::AtomicFile>(summary_path);
+    for (const std::string& p : scene_paths)
+      scene_files.push_back(std::make_unique<ex::AtomicFile>(p));
   } catch (const std::exception& e) {
     trace.reset();
     summary_file.reset();
+    scene_files.clear();
     remove_created_dir();
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitRuntime;
@@ -400,6 +448,7 @@ int run_scenario(const Options& o) {
   auto fail = [&](int status, const std::string& message) {
     trace.reset();
     summary_file.reset();
+    scene_files.clear();
     remove_created_dir();
     std::fprintf(stderr, "error: %s\n", message.c_str());
     return status;
@@ -411,6 +460,8 @@ int run_scenario(const Options& o) {
   summary.expectations_checked = !sf.expect.empty();
   ip::ScenarioResult result;
   ex::ForceLayerSummaryAccumulator<3> force_layer;
+  ex::ScenePictures pictures(geometry.chains, spec.hand.finger_names, geometry.object, spec.stages,
+                             spec.name);
   const auto wall0 = std::chrono::steady_clock::now();
   try {
     ex::TraceRow<3> row;
@@ -423,6 +474,7 @@ int run_scenario(const Options& o) {
         ex::fill_trace_row<3>(rec, spec.stages[si].name, row);
         trace->write(row);
       }
+      if (!scene_files.empty()) pictures.add(rec);
     };
     result = run_on_plant(sf, observer);
   } catch (const std::invalid_argument& e) {
@@ -441,7 +493,15 @@ int run_scenario(const Options& o) {
   try {
     if (summary_file)
       summary_file->write(summary_document(summary, result, force_layer).dump(2) + "\n");
-    ex::commit_together({trace ? &trace->file() : nullptr, summary_file.get()});
+    if (!scene_files.empty()) {
+      scene_files[0]->write(pictures.grasped());
+      scene_files[1]->write(pictures.mid());
+      scene_files[2]->write(pictures.end());
+    }
+    ex::AtomicFile* scene[3] = {nullptr, nullptr, nullptr};
+    for (std::size_t i = 0; i < scene_files.size() && i < 3; ++i) scene[i] = scene_files[i].get();
+    ex::commit_together(
+        {trace ? &trace->file() : nullptr, summary_file.get(), scene[0], scene[1], scene[2]});
   } catch (const std::exception& e) {
     return fail(kExitRuntime, e.what());
   }
@@ -457,6 +517,8 @@ int run_scenario(const Options& o) {
     if (!result.failure.empty()) std::printf("run stopped early: %s\n", result.failure.c_str());
     if (!trace_path.empty()) std::printf("trace:   %s\n", trace_path.c_str());
     if (!summary_path.empty()) std::printf("summary: %s\n", summary_path.c_str());
+    if (!scene_paths.empty())
+      std::printf("scene:   %s/scene_{grasped,mid,end}.svg\n", o.out_dir.c_str());
   }
   const bool violated = !summary.violations.empty();
   std::fflush(stdout);
@@ -485,7 +547,8 @@ int main(int argc, char** argv) {
   app.add_option("files", o.files,
                  "scenario file (JSON); with --table: run summaries (summary.json) to tabulate")
       ->required();
-  app.add_option("--out", o.out_dir, "directory for trace.csv and summary.json (created)");
+  app.add_option("--out", o.out_dir,
+                 "directory for trace.csv, summary.json and scene_{grasped,mid,end}.svg (created)");
   app.add_option("--trace", o.trace, "per-tick trace CSV file");
   app.add_option("--summary", o.summary, "summary JSON file");
   app.add_flag("--check", o.check, "exit with status 1 when an expectation is violated");

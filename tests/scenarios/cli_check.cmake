@@ -1,8 +1,11 @@
 # Runs inhand_scenario and checks its exit status, its output and the files it leaves.
 #   -DEXE=<inhand_scenario> -DSCENARIO=<file> -DOUT_DIR=<dir> -DEXPECT_EXIT=<n>
 #   -DEXPECT_OUTPUT=<regex>            must match stdout + stderr
-#   -DEXPECT_FILES=ON|OFF              OUT_DIR holds trace.csv and summary.json (ON) or
+#   -DEXPECT_FILES=ON|OFF              OUT_DIR holds trace.csv, summary.json and the three
+#                                      scene_*.svg pictures (ON) or
 #                                      nothing at all (OFF: a failed run writes nothing)
+#   -DEXPECT_NOT_PICTURED=<list>       optional, with EXPECT_FILES=ON: the instants whose
+#                                      picture says the run did not reach them
 #   -DTABLE_EXIT=<n> -DTABLE_OUTPUT=<regex>  optional: then `--table OUT_DIR/summary.json
 #                                      --check` must exit TABLE_EXIT and print TABLE_OUTPUT
 #   -DARGS=<args>                      optional: more arguments for the run, separated by
@@ -65,14 +68,32 @@ endif()
 file(GLOB left LIST_DIRECTORIES true ${OUT_DIR}/* ${OUT_DIR}/.*)
 list(REMOVE_ITEM left ${prepared})
 if(EXPECT_FILES)
-  foreach(f trace.csv summary.json)
+  set(outputs trace.csv summary.json scene_grasped.svg scene_mid.svg scene_end.svg)
+  foreach(f IN LISTS outputs)
     if(NOT EXISTS ${OUT_DIR}/${f})
       message(FATAL_ERROR "${OUT_DIR}/${f} was not written")
     endif()
   endforeach()
   list(LENGTH left n)
-  if(NOT n EQUAL 2)
+  list(LENGTH outputs want)
+  if(NOT n EQUAL want)
     message(FATAL_ERROR "unexpected files in ${OUT_DIR}: ${left}")
+  endif()
+  # The pictures: the grasp and the end drawn (an <svg> with the fingers' polylines); an
+  # instant the run did not reach says so.
+  foreach(instant grasped mid end)
+    file(READ ${OUT_DIR}/scene_${instant}.svg svg)
+    if(NOT svg MATCHES "^<[?]xml" OR NOT svg MATCHES "<svg " OR NOT svg MATCHES "</svg>\n$")
+      message(FATAL_ERROR "${OUT_DIR}/scene_${instant}.svg is not an SVG document")
+    endif()
+    if(svg MATCHES "did not reach")
+      list(APPEND not_reached ${instant})
+    elseif(NOT svg MATCHES "<polyline")
+      message(FATAL_ERROR "${OUT_DIR}/scene_${instant}.svg draws no finger")
+    endif()
+  endforeach()
+  if(DEFINED EXPECT_NOT_PICTURED AND NOT "${not_reached}" STREQUAL "${EXPECT_NOT_PICTURED}")
+    message(FATAL_ERROR "pictures not reached: '${not_reached}', expected '${EXPECT_NOT_PICTURED}'")
   endif()
 elseif(left)
   message(FATAL_ERROR "a failed run left output behind: ${left}")

@@ -23,6 +23,7 @@
 #include "common/atomic_file.hpp"
 #include "common/controller_instances.hpp"
 #include "common/expectations.hpp"
+#include "common/scene_svg.hpp"
 #include "common/summary_json.hpp"
 #include "common/test_support.hpp"
 #include "common/trace_csv.hpp"
@@ -1211,6 +1212,85 @@ std::vector<std::string> split(const std::string& line) {
   std::istringstream ss(line);
   while (std::getline(ss, cell, ',')) out.push_back(cell);
   return out;
+}
+
+// ---------------------------------------------------------------------------
+// The scene pictures (common/scene_svg.hpp)
+
+// Extent of panel k's silhouette: (width, height), and its centre back in world units.
+std::pair<Eigen::Vector2d, Eigen::Vector2d> extent(const std::vector<Eigen::Vector2d>& pts, int k) {
+  Eigen::Vector2d lo = pts.front(), hi = pts.front();
+  for (const Eigen::Vector2d& p : pts) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  Eigen::Vector2d centre = 0.5 * (lo + hi);
+  centre.x() -= (2 * k + 1) * ex::kSceneHalfWidth;
+  return {hi - lo, centre};
+}
+
+// Each shape's silhouette in each view is its orthographic projection: the cylinder and
+// box of the presets (object z along world X, Ry(pi/2)) and a sphere, off the origin.
+TEST(SceneSvg, SilhouettesAreTheShapesProjections) {
+  namespace sd = ex::scene_detail;
+  inhand::Pose<double, 3> pose;
+  pose.position = Eigen::Vector3d(0.01, -0.02, 0.005);
+  pose.rotation = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  struct Case {
+    ip::ObjectShape shape;
+    Eigen::Vector3d world_half;  // half extents along world x, y, z
+  };
+  const Case cases[] = {{ip::ObjectShape::cylinder(0.02, 0.05), {0.05, 0.02, 0.02}},
+                        {ip::ObjectShape::box(0.01, 0.02, 0.04), {0.04, 0.02, 0.01}},
+                        {ip::ObjectShape::sphere(0.03), {0.03, 0.03, 0.03}}};
+  for (const Case& c : cases) {
+    for (int k = 0; k < 3; ++k) {
+      const sd::View& view = sd::views()[static_cast<std::size_t>(k)];
+      const auto [size, centre] = extent(sd::silhouette(c.shape, pose, view, k), k);
+      SCOPED_TRACE(std::string(view.name) + ", shape " +
+                   std::to_string(static_cast<int>(c.shape.kind)));
+      // A sphere's outline is a 48-gon: its extent is within cos(pi/48) of the diameter.
+      const double tol = c.shape.kind == ip::ObjectShape::Kind::sphere ? 2e-4 : 1e-12;
+      EXPECT_NEAR(size.x(), 2 * c.world_half(view.h), tol);
+      EXPECT_NEAR(size.y(), 2 * c.world_half(view.v), tol);
+      EXPECT_NEAR(centre.x(), pose.position(view.h), tol);
+      EXPECT_NEAR(centre.y(), pose.position(view.v), tol);
+    }
+  }
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// Every finger is drawn in each view; a contact (red point and normal) only where the
+// finger touches.
+TEST(SceneSvg, DrawsEveryFingerAndOnlyTheTouchingContacts) {
+  ex::Scene s;
+  s.object = ip::ObjectShape::box(0.01, 0.01, 0.04);
+  for (int i = 0; i < 2; ++i) {
+    ex::Scene::Finger f;
+    f.name = i == 0 ? "first" : "thumb";
+    const double y = i == 0 ? 0.05 : -0.05;
+    f.links = {Eigen::Vector3d(0, y, 0.05), Eigen::Vector3d(0, y, 0.0),
+               Eigen::Vector3d(0, 0.5 * y, 0.0)};
+    f.tip_radius = 0.01;
+    f.touching = i == 0;
+    f.contact_point = Eigen::Vector3d(0, 0.01, 0);
+    f.normal = Eigen::Vector3d(0.0, 0.8, 0.6);  // seen at a slant in every view
+    f.normal_force = 1.0;
+    s.fingers.push_back(f);
+  }
+  const std::string svg = ex::scene_svg(s);
+  const std::size_t box_edges = 12;
+  EXPECT_EQ(count(svg, "<polyline"), 3 * (box_edges + s.fingers.size()));
+  // Per view, a touching finger's contact: a red dot and an arrow of three red lines.
+  EXPECT_EQ(count(svg, "#c00000"), 3u * 4u);
+  s.fingers[0].touching = false;
+  EXPECT_EQ(count(ex::scene_svg(s), "#c00000"), 0u);
+  EXPECT_NE(svg.find("fingers: first, thumb"), std::string::npos);
 }
 
 TEST(TraceCsv, SpatialRowsMatchTheHeader) {
