@@ -20,7 +20,10 @@
 // damping kv, tracking the integrated command. A pure velocity servo (position_gain 0)
 // holds no position: in contact its joint yields to the contact force at f / kv, the
 // force loop sees a damper rather than a spring, and the grasp chatters (measured in
-// tests/mujoco/mujoco_cylinder.cpp).
+// tests/mujoco/mujoco_cylinder.cpp). The controller is told this servo
+// (controller_config(): ForceLayerParams::servo_stiffness kv position_gain, servo_damping
+// kv), so that its force loop is scheduled on the servo in series with the contact and
+// kept clear of the servo's feedthrough (include/inhand/controller/joint_servo.hpp).
 // Frozen object (the grasp stage, as in the paper): a weld equality of the model between
 // the object and the world (MujocoSetup::object_hold), switched on and off through
 // mjModel::eq_active. It holds the object at its compile-time pose (qpos0: the only
@@ -39,6 +42,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
@@ -115,8 +119,20 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
     mj_forward(m, data_.get());
   }
 
+  /// The controller's configuration for this hand: the chains read from the model and,
+  /// unless the caller set them, the joint servo as the force layer should see it
+  /// (ForceLayerParams::servo_stiffness, servo_damping): damping kv, stiffness
+  /// kv position_gain, with kv the largest of the fingers' actuators (the stiffer side for
+  /// the gain cap).
   Controller::Config controller_config(Controller::Config base) const {
     base = plant::controller_config_for(setup_.hand, base);
+    if (base.force_layer.servo_stiffness == 0.0 && base.force_layer.servo_damping == 0.0) {
+      double kv = 0.0;
+      for (const Finger& f : fingers_)
+        for (int a : f.actuator) kv = std::max(kv, model_->actuator_gainprm[a * mjNGAIN]);
+      base.force_layer.servo_damping = kv;
+      base.force_layer.servo_stiffness = kv * setup_.position_gain;
+    }
     for (std::size_t i = 0; i < chains_.size(); ++i) base.fingers[i].chain = chains_[i];
     return base;
   }

@@ -268,6 +268,9 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     fl.contact_damping =
         f.number("contact_damping", fl.contact_damping, Range::non_negative_up_to(1e6));
     fl.capacity_time = f.number("capacity_time", fl.capacity_time, Range::non_negative_up_to(10.0));
+    fl.servo_stiffness =
+        f.number("servo_stiffness", fl.servo_stiffness, Range::non_negative_up_to(1e6));
+    fl.servo_damping = f.number("servo_damping", fl.servo_damping, Range::non_negative_up_to(1e6));
     f.finish();
   }
   {

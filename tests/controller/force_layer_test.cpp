@@ -409,6 +409,99 @@ TEST(ForceLayer, ASettledShearIsNotSlipNorBeyondCapacity) {
   EXPECT_LT(flagged, 40);
 }
 
+/// One finger pressing a fixed object through a joint servo (joint_servo.hpp) with
+/// J = I along the normal: the set-point integrates the command v and the servo pushes
+/// with K (x_ref - x) + D (v - x') on a contact of stiffness k_c and damping c_c
+/// (MuJoCo's soft contact is damped: 100 N s/m here), the finger massless:
+/// x' = (K (x_ref - x) + D v - k_c x) / (D + c_c), f = k_c x + c_c x'. A change of v thus
+/// reaches f within the tick through D c_c / (D + c_c): the servo's feedthrough. The
+/// command of a tick acts over the next (20 sub-steps). Worst |f - f_d| over the last
+/// second of five.
+double servo_contact_loop(double k_c, double K, double D, bool modelled) {
+  const double seconds = 5.0, c_c = 100.0;
+  Grasp g;
+  g.touching << 1, 0, 0, 0;
+  g.pattern << 1, 0, 0, 0;
+  g.measured.setZero();
+  Layer::ForceVector gain = Layer::ForceVector::Zero();
+  gain(0) = 1.0;  // servo_normal_gain of J = I
+  inhand::ForceLayerParams<double> p;
+  if (modelled) {
+    p.servo_stiffness = K;
+    p.servo_damping = D;
+  }
+  Layer layer;
+  layer.set_params(p);
+  Layer::Result r;
+  const double dt = 1e-3;
+  const int ticks = static_cast<int>(seconds / dt);
+  double x = 0.0, x_ref = 0.0, worst = 0.0;
+  for (int t = 0; t < ticks; ++t) {
+    Layer::Step step = g.step(dt, false);
+    step.servo_gain = &gain;
+    layer.update(step, r);
+    const double v = r.velocity(0), x_before = x;
+    double xd = 0.0;
+    for (int k = 0; k < 20; ++k) {
+      x_ref += v * dt / 20;
+      xd = (K * (x_ref - x) + D * v - k_c * x) / (D + c_c);
+      x += xd * dt / 20;
+    }
+    g.steps.col(0) = -(x - x_before) * g.normals.col(0);
+    g.measured(0) = std::max(0.0, k_c * x + c_c * xd);
+    if (t >= ticks - 1000) worst = std::max(worst, std::abs(g.measured(0) - 1.0));
+  }
+  return worst;
+}
+
+TEST(ForceLayer, JointServoInSeriesIsScheduledAndDoesNotOscillate) {
+  // Servos over x10 in stiffness and feedthrough (the MuJoCo hands: K 1000-2000 N/m,
+  // D 35-65 N s/m along the normal) on contacts over x20: with the servo modelled the
+  // loop is scheduled on the series stiffness and its gain kept under 1 / (2 D): it
+  // settles to the target.
+  for (double k_c : {500.0, 2000.0, 1e4})
+    for (const auto& [K, D] :
+         {std::pair{200.0, 5.0}, std::pair{1000.0, 35.0}, std::pair{2000.0, 65.0}})
+      EXPECT_LT(servo_contact_loop(k_c, K, D, true), 0.02)
+          << "k_c " << k_c << " K " << K << " D " << D;
+  // Not modelled, the stiffer servo's feedthrough (65 x 100 / 165 = 39 N s/m against the
+  // gain cap of 1 / (2 contact_damping) = 0.05 m/s per N: a loop gain up to 2 within the
+  // tick at the gain cap) on the softest contact makes the force alternate until the
+  // contact opens.
+  EXPECT_GT(servo_contact_loop(500.0, 2000.0, 65.0, false), 0.2);
+}
+
+TEST(ForceLayer, ForceLoopGainFollowsTheServo) {
+  // No servo: w_c / k, capped at 1 / (2 c).
+  EXPECT_DOUBLE_EQ(inhand::force_loop_gain(2000.0, 0.0, 40.0, 10.0, 0.0, 0.0), 0.02);
+  EXPECT_DOUBLE_EQ(inhand::force_loop_gain(500.0, 0.0, 40.0, 10.0, 0.0, 0.0), 0.05);
+  // A servo of K = 2000 N/m in series with a 2000 N/m contact: k = 1000 N/m.
+  EXPECT_DOUBLE_EQ(inhand::force_loop_gain(2000.0, 1.0, 40.0, 0.0, 2000.0, 0.0), 0.04);
+  // Its feedthrough D = 50 N s/m caps the gain at 1 / (2 D).
+  EXPECT_DOUBLE_EQ(inhand::force_loop_gain(2000.0, 1.0, 40.0, 10.0, 2000.0, 50.0), 0.01);
+  // servo_gain scales joint units to the normal: 1 / |J^T n|^2.
+  Eigen::Matrix<double, 3, 2> J;
+  J << 0.1, 0.0, 0.0, 0.05, 0.0, 0.0;
+  const Eigen::Vector3d n(1.0, 0.0, 0.0);
+  EXPECT_DOUBLE_EQ(inhand::servo_normal_gain<double>(J, n), 100.0);
+  EXPECT_EQ(inhand::servo_normal_gain<double>(J, Eigen::Vector3d(0.0, 0.0, 1.0)), 0.0);
+  // The press direction J J^T n / (n^T J J^T n) of a 4-joint finger has normal part 1
+  // and stores a force along n alone through a servo of uniform stiffness: the set-point
+  // step dq = J^+ d, torque K dq (K = 1), and the fingertip force f with J^T f = K dq.
+  Eigen::Matrix<double, 3, 4> J4;
+  J4 << 0.05, 0.02, 0.0, -0.01, 0.0, 0.04, 0.03, 0.01, 0.01, 0.0, 0.02, 0.03;
+  const Eigen::Vector3d slant = Eigen::Vector3d(1.0, 1.0, 0.5).normalized();
+  const Eigen::Vector3d d = inhand::servo_press_direction<double, 3>(J4, slant);
+  EXPECT_NEAR(d.dot(slant), 1.0, 1e-12);
+  const Eigen::Vector4d dq = J4.transpose() * (J4 * J4.transpose()).ldlt().solve(d);
+  const Eigen::Vector3d f = J4.transpose().completeOrthogonalDecomposition().solve(dq);
+  EXPECT_LT((f - f.dot(slant) * slant).norm(), 1e-9 * f.norm());
+  // Pressed along n itself instead, the stored force has a tangential part.
+  const Eigen::Vector4d dq_n = J4.transpose() * (J4 * J4.transpose()).ldlt().solve(slant);
+  const Eigen::Vector3d f_n = J4.transpose().completeOrthogonalDecomposition().solve(dq_n);
+  EXPECT_GT((f_n - f_n.dot(slant) * slant).norm(), 0.01 * f_n.norm());
+}
+
 TEST(ForceLayer, ParamsNameTheField) {
   inhand::ForceLayerParams<double> p;
   EXPECT_TRUE(p.validate().ok());
@@ -426,6 +519,12 @@ TEST(ForceLayer, ParamsNameTheField) {
   p = {};
   p.capacity_time = -1.0;
   EXPECT_STREQ(p.validate().field, "force_layer.capacity_time");
+  p = {};
+  p.servo_stiffness = -1.0;
+  EXPECT_STREQ(p.validate().field, "force_layer.servo_stiffness");
+  p = {};
+  p.servo_damping = std::numeric_limits<double>::infinity();
+  EXPECT_STREQ(p.validate().field, "force_layer.servo_damping");
 }
 
 }  // namespace

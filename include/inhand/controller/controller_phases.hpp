@@ -37,8 +37,10 @@ void run_force_layer(const TickInput<Types>& t, bool object_free, ControllerStat
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     sc.touching(i) = f.contact.touching ? 1 : 0;
     sc.tip_steps.col(i).setZero();
+    sc.servo_gain(i) = Scalar(0);
     if (f.contact.touching) {
       sc.normals.col(i) = f.contact.normal.normalized();
+      sc.servo_gain(i) = servo_normal_gain<Scalar>(m.jacobian, sc.normals.col(i));
       sc.points.col(i) = f.contact.contact_point;
       sc.measured(i) = m.force_gate.force();
       // Fingertip displacement since the last tick, through the last tick's Jacobian.
@@ -57,6 +59,7 @@ void run_force_layer(const TickInput<Types>& t, bool object_free, ControllerStat
   step.measured = &sc.measured;
   step.pattern = &sc.pattern;
   step.tip_steps = &sc.tip_steps;
+  step.servo_gain = &sc.servo_gain;
   step.object_position = t.object.position;
   step.object_rotation = t.object.rotation;
   step.min_force = t.config.force_planner.min_force;
@@ -83,7 +86,11 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   fo.force_target = force_active ? sc.forces.target(i) : Scalar(0);
   using Vec = typename Types::Vec;
   Vec force = Vec::Zero();
-  if (force_active) force = -sc.forces.velocity(i) * sc.normals.col(i);
+  if (force_active)  // along J J^T n when the joint servo is modelled (joint_servo.hpp)
+    force = -sc.forces.velocity(i) *
+            (t.config.force_layer.servo_stiffness > Scalar(0)
+                 ? servo_press_direction<Scalar, Types::kDim>(m.jacobian, sc.normals.col(i))
+                 : Vec(sc.normals.col(i)));
   const ControllerWarning w = sc.fingers[static_cast<std::size_t>(i)].layer3.command(
       m.layer3, m.jacobian, f.joint_positions, v, f.contact.normal, force_active ? &force : nullptr,
       t.config.max_joint_acceleration, t.dt, fo);
@@ -143,6 +150,7 @@ void begin_grasp(const typename Types::Config& config, const Targets& targets,
     m.grasp_pattern = sc.pattern(i);
     m.grasp_force = scale * sc.pattern(i);
     m.state = FingerState::approaching;
+    m.touched = false;
     m.layer3.servo.reset();
     m.settle.start();
   }
@@ -171,6 +179,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
     if (f.contact.touching) {
       if (m.state == FingerState::approaching) m.layer3.servo.reset_force();
       m.state = FingerState::pressing;
+      m.touched = true;
       detail::remember_contact(m, f.contact, t.object);
       const PressStep<Scalar, Types::kDim> press =
           press_step(g, m.target, f.contact.contact_point, f.contact.normal, t.dt, m.settle);
@@ -191,8 +200,9 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
       m.settle.start();
       m.state = FingerState::approaching;
       const typename Types::Vec p_v = points.virtual_point(m.target.normal);
-      const typename Types::Vec v =
-          approach_velocity(g, p_v, m.target.contact_point, m.target.normal);
+      const bool creep = m.touched && t.config.force_layer.servo_stiffness > Scalar(0);
+      const typename Types::Vec v = approach_velocity(  // creep back: grasp.hpp surface_point
+          g, p_v, creep ? surface_point(p_v, m.target) : m.target.contact_point, m.target.normal);
       w |= detail::command_finger(t, i, points, p_v, v, false, st, sc, fo);
       all_placed = false;
     }
@@ -202,8 +212,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
   out.commanded_twist.setZero();
   out.feedforward_twist.setZero();
   out.pose_error.setZero();
-  // Complete once every finger has been placed for settle_time (with settle_time 0: on
-  // the first tick every finger is placed, never before).
+  // Complete once every finger has been placed for settle_time (0: the first such tick).
   st.settled_time = all_placed ? st.settled_time + t.dt : Scalar(0);
   if (all_placed && st.settled_time >= g.settle_time) st.phase = ControllerPhase::grasped;
   return st.phase == ControllerPhase::grasped ? ControllerStatus::grasped

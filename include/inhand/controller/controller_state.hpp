@@ -37,6 +37,7 @@ struct FingerMemory {
   Scalar grasp_pattern = Scalar(0);  ///< N, q_g of grasp.hpp, set by start_grasp
   Scalar grasp_force = Scalar(0);    ///< N, f_g of grasp.hpp, set by start_grasp
   FingerState state = FingerState::idle;
+  bool touched = false;  ///< touched the object since start_grasp
   SettleWindow<Scalar, Types::kDim> settle{};
   ForceGate<Scalar> force_gate{};
   Vec last_contact_object = Vec::Zero();  ///< m, last contact point, object frame
@@ -108,11 +109,12 @@ struct TickScratch {
   using Forces = ForceLayer<typename Types::ScalarType, Types::kDim, Types::kNumFingers>;
   detail::FingerArray<FingerWork<Types>, Types::kNumFingers> fingers{};
   typename Planner::Mask touching{};
-  typename Planner::Normals normals{};       ///< unit outward normals of the touching
-  typename Planner::Normals points{};        ///< m, contact points of the touching
-  typename Planner::ForceVector pattern{};   ///< N, the planner's pattern q
-  typename Planner::ForceVector measured{};  ///< N, gated normal forces
-  typename Planner::Normals tip_steps{};     ///< m, fingertip step at the contact this tick
+  typename Planner::Normals normals{};         ///< unit outward normals of the touching
+  typename Planner::Normals points{};          ///< m, contact points of the touching
+  typename Planner::ForceVector pattern{};     ///< N, the planner's pattern q
+  typename Planner::ForceVector measured{};    ///< N, gated normal forces
+  typename Planner::Normals tip_steps{};       ///< m, fingertip step at the contact this tick
+  typename Planner::ForceVector servo_gain{};  ///< 1/m^2, servo_normal_gain() per finger
   typename Forces::Result forces{};
   /// Sizes and configures every part for the configuration (allocates only for
   /// run-time sizes).
@@ -132,6 +134,7 @@ struct TickScratch {
     pattern = Planner::ForceVector::Zero(n);
     measured = Planner::ForceVector::Zero(n);
     tip_steps = Planner::Normals::Zero(Types::kDim, n);
+    servo_gain = Planner::ForceVector::Zero(n);
     forces.velocity.setZero(n);
     forces.target.setZero(n);
     forces.slipping.setZero(n);

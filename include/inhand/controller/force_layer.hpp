@@ -25,9 +25,9 @@
 // A loop that does not scale with the contact stiffness. Each finger's loop is
 //   u_i = (w_c / k_i) (e_i + w_i z_i),   z_i' = e_i   (z kept internal, bounded)
 // with k_i [N/m] the online estimate of the contact stiffness (StiffnessEstimator,
-// contact_observers.hpp; max_stiffness until the fit is trusted: the safe side). A
-// compliant finger servo in series only lowers the stiffness seen from the command, so
-// the loop is then slower, never less stable. With k_i = k the loop crosses over at w_c
+// contact_observers.hpp; max_stiffness until the fit is trusted). A joint servo in series
+// (servo_stiffness, servo_damping) adds its stiffness in series and its damping as a
+// feedthrough: joint_servo.hpp, force_loop_gain(). With k_i = k the loop crosses over at w_c
 // whatever the stiffness; the discrete loop with one tick of command delay,
 // z^2 - z + a = 0, a = rho w_c T, is stable for a < 1: at the default w_c = 40 rad/s
 // and T = 1 ms a stiffness under-estimated by up to rho = 25 times is still stable
@@ -36,8 +36,8 @@
 // no actuator lag the loop through it is f_{n+1} = ... - c kp f_n, kp = w_c / k_i, a
 // root near -c kp, unstable (a period-2 oscillation) once c kp >= 1 -- at 500 N/m and
 // 10 N s/m, c kp = 0.8 with the true stiffness, 1.1 with an estimate 27 % low. So kp
-// is capped at 1 / (2 c) (contact_damping; the root at -1/2 or nearer 0): on a soft,
-// damped contact the loop crosses over below w_c (at k / (2 c)), never unstable.
+// is capped at 1 / (2 c) (c: the larger of contact_damping and the servo's feedthrough; the
+// root at -1/2 or nearer 0): on a damped contact the loop crosses over below w_c (k / (2 c)).
 //
 // Grip that follows the load. s is the largest of
 //   1                 the nominal grip (the planner's pattern);
@@ -68,6 +68,7 @@
 #include "inhand/controller/contact_observers.hpp"
 #include "inhand/controller/force_layer_params.hpp"
 #include "inhand/controller/grasp_map.hpp"
+#include "inhand/controller/joint_servo.hpp"
 #include "inhand/math/types.hpp"
 
 namespace inhand {
@@ -98,6 +99,9 @@ class ForceLayer {
     /// Per finger, the fingertip's measured displacement at its contact over the last
     /// tick [m], world frame: J (q - q_prev) (d_tip of contact_observers.hpp).
     const Points* tip_steps = nullptr;
+    /// Per finger, servo_normal_gain() at its contact [1/m^2] (joint_servo.hpp); null or 0:
+    /// the joint servo is not seen (as with ForceLayerParams::servo_stiffness 0).
+    const ForceVector* servo_gain = nullptr;
     Vec object_position = Vec::Zero();
     Rotation<Scalar, Dim> object_rotation = Rotation<Scalar, Dim>::Identity();
     Scalar min_force = Scalar(0);
@@ -214,8 +218,9 @@ class ForceLayer {
     bool limited = false;
     for (int i = 0; i < n_; ++i) {
       if (!touching(i)) continue;
-      Scalar kp = p.bandwidth / stiffness_.estimate()(i);
-      if (p.contact_damping > Scalar(0)) kp = std::min(kp, Scalar(0.5) / p.contact_damping);
+      const Scalar kp =
+          force_loop_gain(stiffness_.estimate()(i), in.servo_gain ? (*in.servo_gain)(i) : Scalar(0),
+                          p.bandwidth, p.contact_damping, p.servo_stiffness, p.servo_damping);
       const Scalar zmax = p.integral_corner > Scalar(0)
                               ? p.max_integral_velocity / (kp * p.integral_corner)
                               : Scalar(0);

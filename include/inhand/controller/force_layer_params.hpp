@@ -30,6 +30,13 @@ struct ForceLayerParams {
   Scalar rigid_tolerance = Scalar(0.1);        ///< eps, dimensionless (see the file comment)
   Scalar contact_damping = Scalar(10);         ///< c [N s/m], largest expected; 0: no gain cap
   Scalar capacity_time = Scalar(0.02);  ///< [s], slip at the grip's cap before beyond_capacity
+  /// The hand's joint servo, every joint alike (joint_servo.hpp): position stiffness K
+  /// [N m/rad] and velocity gain D [N m s/rad] with which it tracks the integral of the
+  /// joint-velocity command. 0 (the default): not modelled, a rigid servo. With K > 0 the
+  /// force loop is scheduled on the contact and the servo in series, presses along
+  /// J J^T n, and a finger that lost its contact after touching comes back at creep speed.
+  Scalar servo_stiffness = Scalar(0);
+  Scalar servo_damping = Scalar(0);
 
   Validation validate() const noexcept {
     const Scalar inf = std::numeric_limits<Scalar>::infinity();
@@ -55,6 +62,8 @@ struct ForceLayerParams {
         {"force_layer.rigid_tolerance", rigid_tolerance, Scalar(0), inf, true},
         {"force_layer.contact_damping", contact_damping, Scalar(0), inf, false},
         {"force_layer.capacity_time", capacity_time, Scalar(0), inf, false},
+        {"force_layer.servo_stiffness", servo_stiffness, Scalar(0), inf, false},
+        {"force_layer.servo_damping", servo_damping, Scalar(0), inf, false},
     };
     for (const Field& f : fields) {
       const bool ok =

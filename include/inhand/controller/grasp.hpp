@@ -154,6 +154,17 @@ inline Vector<Scalar, Dim> approach_velocity(const GraspParams<Scalar>& g,
   return v - g.creep_speed * n;
 }
 
+/// Where a finger that has touched its target's surface aims when it comes back (the
+/// target moved along its normal to the fingertip's level): approach_velocity() then
+/// keeps only the tangential correction and the creep; the surface is where it was
+/// touched, and aiming deeper would hit it at approach_speed.
+template <typename Scalar, int Dim>
+inline Vector<Scalar, Dim> surface_point(const Vector<Scalar, Dim>& p_v,
+                                         const GraspTarget<Scalar, Dim>& t) noexcept {
+  return t.contact_point -
+         ((t.contact_point - p_v).dot(t.normal) / t.normal.squaredNorm()) * t.normal;
+}
+
 /// A pressing finger's progress towards its target: the window over which a stall is
 /// judged (see the file comment). Reset by start().
 template <typename Scalar, int Dim>
