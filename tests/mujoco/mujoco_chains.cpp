@@ -1,8 +1,8 @@
 // The finger chains read from the compiled MJCF hands (examples/mujoco/mujoco_chains.hpp)
 // against MuJoCo's own kinematics, and against the presets the models were written from
-// (include/inhand/sim/presets.hpp): the three-finger hand (models/three_finger_cylinder.xml)
-// and the Shadow-like hand with either paper object (models/shadow_like_cylinder.xml,
-// models/shadow_like_box.xml). Units: metres, radians.
+// (include/inhand/sim/presets.hpp): the three-finger and the Shadow-like hands, each with
+// either paper object (models/<hand>_cylinder.xml, models/<hand>_box.xml). Units: metres,
+// radians.
 #include "mujoco_chains.hpp"
 
 #include <gtest/gtest.h>
@@ -33,6 +33,7 @@ struct HandModel {
 
 const HandModel kHandModels[] = {
     {"three_finger", "three_finger_cylinder.xml", &inhand::plant::three_finger_hand},
+    {"three_finger_box", "three_finger_box.xml", &inhand::plant::three_finger_hand},
     {"shadow_like", "shadow_like_cylinder.xml", &inhand::plant::shadow_like_hand},
     {"shadow_like_box", "shadow_like_box.xml", &inhand::plant::shadow_like_hand},
 };
