@@ -485,21 +485,41 @@ TEST(ForceLayer, ForceLoopGainFollowsTheServo) {
   const Eigen::Vector3d n(1.0, 0.0, 0.0);
   EXPECT_DOUBLE_EQ(inhand::servo_normal_gain<double>(J, n), 100.0);
   EXPECT_EQ(inhand::servo_normal_gain<double>(J, Eigen::Vector3d(0.0, 0.0, 1.0)), 0.0);
-  // The press direction J J^T n / (n^T J J^T n) of a 4-joint finger has normal part 1
-  // and stores a force along n alone through a servo of uniform stiffness: the set-point
-  // step dq = J^+ d, torque K dq (K = 1), and the fingertip force f with J^T f = K dq.
+  // The press direction of a 4-joint finger through a servo of joint stiffness K in
+  // series with a contact of normal stiffness k_c (and any tangential stiffness; here
+  // 3 k_c, or rigid as MuJoCo's no-slip friction): its normal part is 1, and the force it
+  // stores is along n alone. The set-point step dq = J^+ d; the servo's torque
+  // K (dq - dq_tip) balances J^T f; the fingertip moves J dq_tip = C_c f, so
+  // f = (C_c + J J^T / K)^-1 d.
   Eigen::Matrix<double, 3, 4> J4;
   J4 << 0.05, 0.02, 0.0, -0.01, 0.0, 0.04, 0.03, 0.01, 0.01, 0.0, 0.02, 0.03;
   const Eigen::Vector3d slant = Eigen::Vector3d(1.0, 1.0, 0.5).normalized();
-  const Eigen::Vector3d d = inhand::servo_press_direction<double, 3>(J4, slant);
-  EXPECT_NEAR(d.dot(slant), 1.0, 1e-12);
-  const Eigen::Vector4d dq = J4.transpose() * (J4 * J4.transpose()).ldlt().solve(d);
-  const Eigen::Vector3d f = J4.transpose().completeOrthogonalDecomposition().solve(dq);
-  EXPECT_LT((f - f.dot(slant) * slant).norm(), 1e-9 * f.norm());
-  // Pressed along n itself instead, the stored force has a tangential part.
-  const Eigen::Vector4d dq_n = J4.transpose() * (J4 * J4.transpose()).ldlt().solve(slant);
-  const Eigen::Vector3d f_n = J4.transpose().completeOrthogonalDecomposition().solve(dq_n);
-  EXPECT_GT((f_n - f_n.dot(slant) * slant).norm(), 0.01 * f_n.norm());
+  const Eigen::Matrix3d along_n = slant * slant.transpose();
+  const Eigen::Matrix3d across_n = Eigen::Matrix3d::Identity() - along_n;
+  const double K = 1.5;  // N m/rad: k_s = K / |J^T n|^2, about 380 N/m here
+  const auto tangential_share = [&](const Eigen::Vector3d& d, double k_c, double c_t) {
+    const Eigen::Matrix3d C = along_n / k_c + c_t * across_n + J4 * J4.transpose() / K;
+    const Eigen::Vector3d f = C.ldlt().solve(d);
+    return (f - f.dot(slant) * slant).norm() / f.norm();
+  };
+  for (double k_c : {100.0, 1000.0, 1e4, 1e6}) {
+    const Eigen::Vector3d d = inhand::servo_press_direction<double, 3>(J4, slant, k_c, K);
+    EXPECT_NEAR(d.dot(slant), 1.0, 1e-12) << "k_c " << k_c;
+    EXPECT_LT(tangential_share(d, k_c, 1.0 / (3.0 * k_c)), 1e-9) << "k_c " << k_c;
+    EXPECT_LT(tangential_share(d, k_c, 0.0), 1e-9) << "k_c " << k_c;
+  }
+  // The servo's own direction J J^T n / (n^T J J^T n) (the stiff-contact limit) stores a
+  // tangential force on a contact as soft as the servo, and n itself on a stiff one.
+  const Eigen::Vector3d d_servo = inhand::servo_press_direction<double, 3>(J4, slant, 1e12, K);
+  EXPECT_GT(tangential_share(d_servo, 380.0, 0.0), 0.05);
+  EXPECT_GT(tangential_share(slant, 1e5, 0.0), 0.02);
+  // Not modelled (K = 0) or J^T n = 0: n itself.
+  const auto press = [](const auto& jac, const Eigen::Vector3d& dir, double k_c, double k_servo) {
+    return inhand::servo_press_direction<double, 3>(jac, dir, k_c, k_servo);
+  };
+  EXPECT_EQ(press(J4, slant, 1000.0, 0.0), slant);
+  const Eigen::Vector3d z(0.0, 0.0, 1.0);
+  EXPECT_EQ(press(J, z, 1000.0, K), z);
 }
 
 TEST(ForceLayer, ParamsNameTheField) {

@@ -86,11 +86,11 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   fo.force_target = force_active ? sc.forces.target(i) : Scalar(0);
   using Vec = typename Types::Vec;
   Vec force = Vec::Zero();
-  if (force_active)  // along J J^T n when the joint servo is modelled (joint_servo.hpp)
+  if (force_active)  // stores a force along n through servo and contact (joint_servo.hpp)
     force = -sc.forces.velocity(i) *
-            (t.config.force_layer.servo_stiffness > Scalar(0)
-                 ? servo_press_direction<Scalar, Types::kDim>(m.jacobian, sc.normals.col(i))
-                 : Vec(sc.normals.col(i)));
+            servo_press_direction<Scalar, Types::kDim>(m.jacobian, sc.normals.col(i),
+                                                       st.forces.stiffness_estimate()(i),
+                                                       t.config.force_layer.servo_stiffness);
   const ControllerWarning w = sc.fingers[static_cast<std::size_t>(i)].layer3.command(
       m.layer3, m.jacobian, f.joint_positions, v, f.contact.normal, force_active ? &force : nullptr,
       t.config.max_joint_acceleration, t.dt, fo);

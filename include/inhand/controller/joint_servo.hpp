@@ -11,11 +11,19 @@
 // Jacobian J (Dim x dof, world frame, m/rad).
 //
 // Press direction. The servo's stiffness at the fingertip is K (J J^T)^-1 (for J of full
-// row rank), not isotropic: a set-point displaced along n alone stores a force with a
-// tangential part. Displaced along J J^T n instead, it stores a force along n only. With
+// row rank), not isotropic, and the contact's is finite: the two in series have the
+// compliance J J^T / K + C_c. A set-point step d then stores the force
+// f = (J J^T / K + C_c)^-1 d, which is along n alone for d = (J J^T / K + C_c) n f_n.
+// Since n is a principal direction of the contact's compliance (C_c n = n / k_c, whatever
+// its tangential compliance, rigid included), that step is J J^T n / K + n / k_c: the
+// servo's direction J J^T n and n itself, weighted by the two compliances along n. With
 // the servo modelled, the force part of the command (layer 3's e_F = -u n, eqs. 4-7) is
-// therefore sent along J J^T n, scaled so that its normal part is still u:
-//   e_F = -u J J^T n / (n^T J J^T n).
+// therefore sent along
+//   e_F = -u (w J J^T n / (n^T J J^T n) + (1 - w) n),  w = k_c / (k_c + k_s),
+// whose normal part is still u; k_c is the force layer's contact stiffness estimate. Along
+// n alone (w = 0) a stiff contact stores a tangential force from the servo's anisotropy;
+// along J J^T n alone (w = 1) a contact as soft as the servo stores one from its own
+// compliance, which friction without creep keeps until the object is released.
 // The servo then meets the contact with stiffness k_s = K / |J^T n|^2 [N/m] and feedthrough
 // d_s = D / |J^T n|^2 [N s/m] along n (joint velocities J^T n u / |J^T n|^2, the torques
 // they build, J^T f = tau solved for f); servo_normal_gain() returns 1 / |J^T n|^2.
@@ -39,15 +47,22 @@ Scalar servo_normal_gain(const Jacobian& J, const Normal& n) noexcept {
   return s > Scalar(1e-12) ? Scalar(1) / s : Scalar(0);
 }
 
-/// The press direction J J^T n / (n^T J J^T n), whose normal part is 1 (see the file
-/// comment); n itself when J^T n vanishes.
+/// The press direction for the servo in series with the contact (see the file comment):
+/// w J J^T n / (n^T J J^T n) + (1 - w) n, w = k_contact / (k_contact + k_s),
+/// k_s = servo_stiffness / (n^T J J^T n); its normal part is 1. k_contact [N/m]: the
+/// contact's normal stiffness estimate; servo_stiffness K [N m/rad]. n itself when J^T n
+/// vanishes or the servo is not modelled (K = 0).
 template <typename Scalar, int Dim, typename Jacobian>
-Vector<Scalar, Dim> servo_press_direction(const Jacobian& J,
-                                          const Vector<Scalar, Dim>& n) noexcept {
+Vector<Scalar, Dim> servo_press_direction(const Jacobian& J, const Vector<Scalar, Dim>& n,
+                                          Scalar k_contact, Scalar servo_stiffness) noexcept {
+  if (!(servo_stiffness > Scalar(0))) return n;
   Vector<Scalar, Dim> d = Vector<Scalar, Dim>::Zero();
   for (Eigen::Index j = 0; j < J.cols(); ++j) d += J.col(j) * J.col(j).dot(n);
   const Scalar nd = n.dot(d);
-  return nd > Scalar(1e-12) ? Vector<Scalar, Dim>(d / nd) : n;
+  if (!(nd > Scalar(1e-12))) return n;
+  const Scalar ks = servo_stiffness / nd;
+  const Scalar w = k_contact > Scalar(0) ? k_contact / (k_contact + ks) : Scalar(1);
+  return w * (d / nd) + (Scalar(1) - w) * n;
 }
 
 /// The force loop's proportional gain kp [m/s per N] at one contact. k_contact [N/m]: the
