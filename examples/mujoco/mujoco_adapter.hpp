@@ -17,7 +17,12 @@
 //   ctrl = qd + position_gain (q_ref - q),
 // i.e. torque = kv (qd - qdot) + kv position_gain (q_ref - q): a PD servo of stiffness
 // kv position_gain (1.5 N m/rad with the model's kv 0.05 and the default 30 /s) and
-// damping kv, tracking the integrated command. A pure velocity servo (position_gain 0)
+// damping kv, tracking the integrated command; qd is first limited to the actuator's
+// control range (the joint's velocity limit, applied by the firmware), and the torque by
+// the actuator's force range. The models do not let MuJoCo clip ctrl to the control range
+// (ctrllimited false): ctrl carries the position term too, and clipped at 3 rad/s it capped
+// the servo's torque at kv x 3 = 0.15 N m instead of the force range's 1 N m, which held
+// the thumb below the grasp's 4 N at release_grip 2. A pure velocity servo (position_gain 0)
 // holds no position: in contact its joint yields to the contact force at f / kv, the
 // force loop sees a damper rather than a spring, and the grasp chatters (measured in
 // tests/mujoco/mujoco_cylinder.cpp). The controller is told this servo
@@ -179,7 +184,13 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
   template <class V>
   void command(int i, const V& qd, const sim::TickClock& /*clock*/) noexcept {
     Finger& f = fingers_[static_cast<std::size_t>(i)];
-    for (std::size_t j = 0; j < f.actuator.size(); ++j) f.qd[j] = qd(static_cast<Eigen::Index>(j));
+    const mjtNum* range = model_->actuator_ctrlrange;
+    for (std::size_t j = 0; j < f.actuator.size(); ++j) {
+      // The firmware's velocity limit: the actuator's control range, where it has one.
+      const int a = f.actuator[j];
+      const double v = qd(static_cast<Eigen::Index>(j)), lo = range[2 * a], hi = range[2 * a + 1];
+      f.qd[j] = lo < hi ? std::clamp(v, lo, hi) : v;
+    }
   }
   void command_towards_open(int i, double gain) {
     // finger_away: the servo's set-point follows the finger (no pull back to q_ref).

@@ -13,7 +13,10 @@
 // from the palm body down to the fingertip geom's body, jnt_pos / jnt_axis / jnt_range of
 // each hinge on the way (several hinges in one body are taken in MuJoCo's order), and
 // the velocity limit from the ctrlrange of the actuator driving the joint
-// (min(|lower|, |upper|)), or `default_max_velocity` where no limited actuator drives it.
+// (min(|lower|, |upper|)), or `default_max_velocity` where no actuator driving it has a range
+// around 0. The range is read whether or not MuJoCo clips ctrl with it (ctrllimited): the
+// models' servo sends its position term through ctrl as well, so the hand's firmware
+// (mujoco_adapter.hpp) limits the commanded velocity and MuJoCo only the torque.
 // Throws std::invalid_argument for a name the model lacks, a joint other than a hinge, a
 // joint limit MuJoCo does not enforce, or more joints than the chain holds.
 #pragma once
@@ -61,11 +64,11 @@ inline Pose<double, 3> translation(const Eigen::Vector3d& t) {
 inline Pose<double, 3> body_offset(const mjModel* m, int b) {
   return pose_of(m->body_pos + 3 * b, m->body_quat + 4 * b);
 }
-/// The velocity limit of joint j: its actuator's control range, or the default.
+/// The velocity limit of joint j: its actuator's control range (clipped by MuJoCo or not),
+/// or the default.
 inline double velocity_limit(const mjModel* m, int j, double default_max_velocity) {
   for (int a = 0; a < m->nu; ++a) {
     if (m->actuator_trntype[a] != mjTRN_JOINT || m->actuator_trnid[2 * a] != j) continue;
-    if (!m->actuator_ctrllimited[a]) continue;
     const double lo = m->actuator_ctrlrange[2 * a], hi = m->actuator_ctrlrange[2 * a + 1];
     if (lo < 0.0 && hi > 0.0) return std::min(-lo, hi);
   }
