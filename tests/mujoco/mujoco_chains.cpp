@@ -211,7 +211,7 @@ TEST(MujocoChainsTwistedFinger, TurnedFramesOffsetAnchorsAndGeneralAxesAgreeWith
   const MujocoChain& c = h.chains[0];
   ASSERT_TRUE(c.validate().ok()) << c.validate().field;
   EXPECT_DOUBLE_EQ(c.joints[0].max_velocity, 3.0);  // no actuator: the default
-  EXPECT_DOUBLE_EQ(c.joints[1].max_velocity, 2.0);  // min(|-2|, 2.5)
+  EXPECT_DOUBLE_EQ(c.joints[1].max_velocity, 2.0);  // min(|-2|, 2.5), ctrl not clipped
   EXPECT_DOUBLE_EQ(c.fingertip_radius, 0.008);
   expect_agreement(h, "twisted");
 }

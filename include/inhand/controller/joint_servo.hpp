@@ -35,7 +35,7 @@
 namespace inhand {
 
 /// 1 / |J^T n|^2 [1/m^2]: the factor from joint-servo stiffness (or damping) to its value
-/// along the contact normal n (unit) for a press along J J^T n; 0 when J^T n vanishes
+/// along the contact normal n (unit) for a set-point step along J J^T n; 0 when J^T n vanishes
 /// (no joint moves the fingertip along n: nothing is known).
 template <typename Scalar, typename Jacobian, typename Normal>
 Scalar servo_normal_gain(const Jacobian& J, const Normal& n) noexcept {
@@ -50,8 +50,9 @@ Scalar servo_normal_gain(const Jacobian& J, const Normal& n) noexcept {
 /// The press direction for the servo in series with the contact (see the file comment):
 /// w J J^T n / (n^T J J^T n) + (1 - w) n, w = k_contact / (k_contact + k_s),
 /// k_s = servo_stiffness / (n^T J J^T n); its normal part is 1. k_contact [N/m]: the
-/// contact's normal stiffness estimate; servo_stiffness K [N m/rad]. n itself when J^T n
-/// vanishes or the servo is not modelled (K = 0).
+/// contact's normal stiffness estimate (finite; <= 0 is taken as a rigid contact, w = 1);
+/// servo_stiffness K [N m/rad]. n itself when J^T n vanishes or the servo is not modelled
+/// (K = 0).
 template <typename Scalar, int Dim, typename Jacobian>
 Vector<Scalar, Dim> servo_press_direction(const Jacobian& J, const Vector<Scalar, Dim>& n,
                                           Scalar k_contact, Scalar servo_stiffness) noexcept {
