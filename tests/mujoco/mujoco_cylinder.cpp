@@ -144,7 +144,8 @@ TEST(MujocoCylinder, ServoStiffnessSweep) {
 // faster than 3 rad/s for a while as it closes its lag); held at its limit (0.5 rad) while
 // the set-point runs on, the actuator's torque reaches the force range.
 TEST(MujocoCylinder, FirmwareLimitsTheCommandMujocoTheTorque) {
-  md::MujocoAdapter plant{md::MujocoSetup{}};
+  const md::MujocoSetup setup{};  // the adapter keeps a reference to it
+  md::MujocoAdapter plant(setup);
   const mjModel& m = plant.model();
   const int a = mj_name2id(&m, mjOBJ_ACTUATOR, "left_abduction");
   ASSERT_GE(a, 0);
