@@ -27,7 +27,8 @@
 //    joint's index in the same finger, ratio = multiplier, offset); the mimicked joint
 //    must be a movable joint of the same finger.
 // Refused, with an error naming the finger and the element: XML or URDF that urdfdom
-// rejects (its messages are passed on), missing root or tip link, a tip link not below
+// rejects (its messages are passed on), a '%' in an attribute value or text other than a
+// mesh filename (urdfdom 3.0 would use it as a printf format: urdf/parse.hpp), missing root or tip link, a tip link not below
 // its root link, prismatic, planar or floating joints on the path, no movable joint, a
 // zero axis, lower > upper, non-finite numbers, a mimic of a joint outside the finger,
 // more joints than the chain's MaxDof, and anything FingerChain::validate() refuses.

@@ -90,6 +90,20 @@ std::vector<BadCase> bad_cases() {
        "<sphere radius='-0.01'/></geometry></collision></link>" +
            joint("j1", "revolute", "palm", "tip", ok_inner) + "</robot>",
        "tip", "tip"},
+      // urdfdom 3.0 uses the text of a malformed origin, radius, mass or material as a
+      // printf format: '%s' there crashed the reader (a fuzzed document, the first below).
+      {"'%' in an origin (printf format)",
+       hand("j2", "revolute", "<origin xyz='%s%s%s%s%s%s%s%s'/>" + ok_inner), "tip", "'xyz'"},
+      {"'%' in a fingertip radius",
+       "<robot name='r'><link name='palm'/><link name='tip'><collision><geometry>"
+       "<sphere radius='%n%n'/></geometry></collision></link>" +
+           joint("j1", "revolute", "palm", "tip", ok_inner) + "</robot>",
+       "tip", "'radius' of <sphere>"},
+      {"'%' in a material name",
+       hand("j2", "revolute", ok_inner, "<material name='red%s'><color rgba='1 0'/></material>"),
+       "tip", "<material>"},
+      {"'%' in element text", hand("j2", "revolute", ok_inner, "<note>50%</note>"), "tip",
+       "text of <note>"},
   };
 }
 
@@ -125,6 +139,18 @@ TEST(UrdfErrors, MissingFileNamesThePath) {
   const auto r = inhand::urdf::read_fingers_file("/nonexistent/hand.urdf", {{"f", "palm", "tip"}});
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error.find("/nonexistent/hand.urdf"), std::string::npos) << r.error;
+}
+
+// A '%' where urdfdom never formats it reads: a mesh's (URL-escaped) filename, a comment.
+TEST(UrdfErrors, PercentInAMeshFilenameOrACommentReads) {
+  const std::string xml = hand("j2", "revolute", kAxis + kLimit,
+                               "<!-- 50% scale --><link name='shell'><visual><geometry>"
+                               "<mesh filename='package://hand/my%20mesh.stl'/></geometry>"
+                               "</visual></link>" +
+                                   joint("js", "fixed", "palm", "shell", ""));
+  const auto r = inhand::urdf::read_fingers_string(xml, {{"f", "palm", "tip"}});
+  ASSERT_TRUE(r.ok()) << r.error;
+  EXPECT_EQ(r.fingers[0].dof(), 2);
 }
 
 // The good document of the table reads, with the continuous-joint and default-velocity

@@ -6,11 +6,22 @@
 // parse_model() puts its own handler in place and restores the previous one after;
 // parses are serialised by a mutex, and console_bridge messages that other threads log
 // meanwhile are collected too (they would appear in a failed parse's message).
+//
+// urdfdom 3.0 hands the text of some malformed values to console_bridge as the printf
+// format itself (a radius, length, box size, mass, <origin> xyz/rpy, the robot's version,
+// a material's name or colour): a '%' in such a value makes printf read arguments that
+// were never passed, and the process crashes (a '%n' would write). The document is
+// therefore read first with the same XML parser (tinyxml, a dependency of urdfdom), and a
+// '%' in any attribute value or text is refused, naming the attribute or element and its
+// line, before urdfdom sees it. A mesh's `filename` is exempt: urdfdom never formats it,
+// and URL-escaped paths carry '%'.
 #pragma once
 
 #include <console_bridge/console.h>
+#include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <cstring>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -40,8 +51,49 @@ inline std::mutex& parse_mutex() {
   return m;
 }
 
+/// The node after `node` in document order (depth first), or null; no recursion, so
+/// the depth of the document does not bound the stack.
+inline const TiXmlNode* next_node(const TiXmlNode* node) noexcept {
+  if (node->FirstChild() != nullptr) return node->FirstChild();
+  for (; node != nullptr; node = node->Parent()) {
+    if (node->NextSibling() != nullptr) return node->NextSibling();
+  }
+  return nullptr;
+}
+
+/// Empty if no attribute value (other than `filename`) and no text of the document holds
+/// a '%'; otherwise names the first one. A document tinyxml cannot read passes here:
+/// urdfdom then refuses it with tinyxml's own (constant) message.
+inline std::string find_format_character(const std::string& xml) {
+  TiXmlDocument doc;
+  doc.Parse(xml.c_str());
+  if (doc.Error()) return {};
+  const auto line = [](const TiXmlBase& item) { return std::to_string(item.Row()); };
+  for (const TiXmlNode* node = doc.FirstChild(); node != nullptr; node = next_node(node)) {
+    if (const TiXmlElement* element = node->ToElement()) {
+      for (const TiXmlAttribute* a = element->FirstAttribute(); a != nullptr; a = a->Next()) {
+        if (std::strcmp(a->Name(), "filename") == 0 || std::strchr(a->Value(), '%') == nullptr)
+          continue;
+        return "attribute '" + std::string(a->Name()) + "' of <" + element->Value() + "> at line " +
+               line(*a);
+      }
+    } else if (const TiXmlText* text = node->ToText()) {
+      if (std::strchr(text->Value(), '%') == nullptr) continue;
+      const TiXmlNode* parent = text->Parent();
+      return "the text of <" + std::string(parent != nullptr ? parent->Value() : "") +
+             "> at line " + line(*text);
+    }
+  }
+  return {};
+}
+
 /// Parses a URDF document. Returns the model, or null with `error` set.
 inline ::urdf::ModelInterfaceSharedPtr parse_model(const std::string& xml, std::string& error) {
+  const std::string percent = find_format_character(xml);
+  if (!percent.empty()) {
+    error = percent + " contains '%' (refused: urdfdom 3.0 would pass it to printf as a format)";
+    return nullptr;
+  }
   std::lock_guard<std::mutex> lock(parse_mutex());
   MessageCollector collector;
   console_bridge::OutputHandler* previous = console_bridge::getOutputHandler();
