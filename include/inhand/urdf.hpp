@@ -28,10 +28,10 @@
 //    must be a movable joint of the same finger.
 // Refused, with an error naming the finger and the element: XML or URDF that urdfdom
 // rejects (its messages are passed on), a '%' in an attribute value or text other than a
-// mesh filename (urdfdom 3.0 would use it as a printf format: urdf/parse.hpp), missing root or tip link, a tip link not below
-// its root link, prismatic, planar or floating joints on the path, no movable joint, a
-// zero axis, lower > upper, non-finite numbers, a mimic of a joint outside the finger,
-// more joints than the chain's MaxDof, and anything FingerChain::validate() refuses.
+// mesh filename (urdfdom 3.0 would use it as a printf format: urdf/parse.hpp), missing root or tip
+// link, a tip link not below its root link, prismatic, planar or floating joints on the path, no
+// movable joint, a zero axis, lower > upper, non-finite numbers, a mimic of a joint outside the
+// finger, more joints than the chain's MaxDof, and anything FingerChain::validate() refuses.
 // Nothing is thrown for bad input (only std::bad_alloc could escape, from the
 // allocation of the result).
 #pragma once
