@@ -230,6 +230,8 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     d.singular_threshold =
         k.number("singular_threshold", d.singular_threshold, Range::positive_up_to(1.0));
     d.max_damping = k.number("max_damping", d.max_damping, Range::non_negative_up_to(1.0));
+    c.ik.limited_normal_weight =
+        k.number("limited_normal_weight", c.ik.limited_normal_weight, Range::closed(1.0, 1000.0));
     k.finish();
   }
   {

@@ -5,4 +5,13 @@ if(INHAND_HAVE_CAMPAIGN)
   add_test(NAME campaign.slice_seeds_0_19
            COMMAND inhand_campaign --first-seed 0 --count 20 --min-success 0.99)
   set_tests_properties(campaign.slice_seeds_0_19 PROPERTIES LABELS campaign TIMEOUT 300)
+  # Wide-range cases whose grasp timed out before a pressing finger's contact normal had
+  # priority in the IK at its joint limits (the thumb of seed 301 pressed 6.3 N against a
+  # 0.6 N target, seed 988's did not settle; both spheres with +0.1 N of force bias).
+  add_test(NAME campaign.wide_grasp_at_a_joint_limit
+           COMMAND inhand_campaign --wide --first-seed 301 --count 1 --min-success 1)
+  add_test(NAME campaign.wide_grasp_at_a_joint_limit_988
+           COMMAND inhand_campaign --wide --first-seed 988 --count 1 --min-success 1)
+  set_tests_properties(campaign.wide_grasp_at_a_joint_limit campaign.wide_grasp_at_a_joint_limit_988
+                       PROPERTIES LABELS campaign TIMEOUT 120)
 endif()

@@ -8,7 +8,10 @@
 //  - a finger whose distal joint follows the middle one commands both in ratio and
 //    still meets the contact velocity; in a closed loop a joint driven at its limit
 //    stops at the limit less the margin, with the continuity bound active;
-//  - the configuration checks name the coupling and margin fields.
+//  - with the contact normal weighted (the normal-priority solve), the miss of a held
+//    re-solve moves off the normal into the tangent plane, never more along the normal
+//    than the plain solve's, at the least weighted objective the box allows;
+//  - the configuration checks name the coupling, margin and normal-weight fields.
 #include <gtest/gtest.h>
 
 #include <Eigen/QR>
@@ -253,6 +256,108 @@ TEST(ContactIkPositionLimits, InvalidBoxIsRejected) {
   lo(1) = -1;
   hi(2) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(inhand::has(ik.solve(J, x, vmax, lo, hi, qd).status, IkStatus::invalid_input));
+}
+
+/// Random boxes that hold joints, solved plainly and with the normal weighted: the weighted
+/// solve stays in the box, leaves no more miss along the normal than the plain one (its
+/// objective weighs that miss w^2 times as much, the plain one's is the least unweighted
+/// miss: adding the two optimality inequalities gives (w^2 - 1) miss_w <= (w^2 - 1) miss_p),
+/// reaches the least weighted objective the box allows, and changes nothing when nothing is
+/// held or w = 1.
+template <int N>
+int sweep_normal_priority(std::uint64_t seed, int calls) {
+  using Ik = inhand::ContactIk<double, 3, N>;
+  using JV = typename Ik::JointVector;
+  using Jac = typename Ik::Jacobian;
+  auto rng = make_rng(seed);
+  inhand::IkParams<double> params;
+  params.limited_normal_weight = 10.0;
+  Ik ik(N, params);
+  inhand::IkParams<double> equal = params;
+  equal.limited_normal_weight = 1.0;
+  Ik ik_equal(N, equal);
+  const JV vmax = JV::Constant(1e300);  // no velocity scaling: the misses compare directly
+  int held = 0;
+  for (int c = 0; c < calls; ++c) {
+    const Jac J = Jac::Random() * 0.08;
+    const Eigen::Vector3d x = Eigen::Vector3d::Random() * uniform(rng, 0.001, 0.2);
+    const Eigen::Vector3d n = Eigen::Vector3d::Random().normalized() * uniform(rng, 0.5, 2.0);
+    JV lo, hi;
+    for (int i = 0; i < N; ++i) {  // about half the joints with little room either way
+      const bool tight = uniform(rng, 0.0, 1.0) < 0.5;
+      lo(i) = tight ? -uniform(rng, 0.0, 0.05) : -10.0;
+      hi(i) = tight ? uniform(rng, 0.0, 0.05) : 10.0;
+    }
+    JV plain, weighted, unit_weight, free_qd;
+    const auto rp = ik.solve(J, x, vmax, lo, hi, plain);
+    const auto rw = ik.solve(J, x, vmax, lo, hi, n, weighted);
+    ik_equal.solve(J, x, vmax, lo, hi, n, unit_weight);
+    ik.solve(J, x, vmax, free_qd);
+    EXPECT_TRUE(unit_weight == plain) << "call " << c << ": w = 1 must be the plain solve";
+    EXPECT_TRUE((weighted.array() >= lo.array()).all() && (weighted.array() <= hi.array()).all())
+        << "call " << c;
+    if (((free_qd.array() >= lo.array()) && (free_qd.array() <= hi.array())).all()) {
+      EXPECT_TRUE(weighted == free_qd) << "call " << c << ": nothing held, nothing may change";
+      continue;
+    }
+    if (rp.held_joints == 0u && rw.held_joints == 0u) continue;
+    ++held;
+    const Eigen::Vector3d u = n.normalized();
+    const double miss_w = std::abs(u.dot(J * weighted - x)),
+                 miss_p = std::abs(u.dot(J * plain - x));
+    EXPECT_LE(miss_w, miss_p + 1e-9 * (1.0 + x.norm())) << "call " << c;
+    if (c % 10 == 1) {
+      const Eigen::Matrix3d W = Eigen::Matrix3d::Identity() + 9.0 * u * u.transpose();
+      const MatXd WJ = W * J;
+      const VecXd Wx = W * x;
+      const double l2 = rw.damping * rw.damping;
+      const double best = brute_force_minimum(WJ, Wx, l2, lo, hi);
+      EXPECT_LE(objective(WJ, Wx, l2, weighted), best + 1e-12 * (1.0 + Wx.squaredNorm()))
+          << "call " << c;
+    }
+  }
+  return held;
+}
+
+TEST(ContactIkPositionLimits, NormalPriorityMovesTheMissIntoTheTangentPlane) {
+  const int per_shape = scaled(4000);
+  const int held = sweep_normal_priority<3>(31, per_shape) +
+                   sweep_normal_priority<4>(32, per_shape) +
+                   sweep_normal_priority<5>(33, per_shape);
+  EXPECT_GT(held, per_shape / 2);  // the held regime is exercised
+  inhand_test::record("normal_priority_sweep_held", held);
+}
+
+TEST(ContactIkPositionLimits, NormalPriorityMeetsTheNormalWhenOneJointIsHeld) {
+  // Three joints, the third held at 0 (its box is [0, 0]): the free two move the contact
+  // along x and along (0, 1, 1). Asked for 0.1 m/s along z (tangential) with the normal along
+  // y, the plain solve splits the miss between the two; the weighted one keeps the normal.
+  inhand::ContactIk<double, 3, 3> ik;
+  Eigen::Matrix3d J;
+  J << 1.0, 0.0, 0.0,  //
+      0.0, 1.0, 0.0,   //
+      0.0, 1.0, 1.0;
+  const Eigen::Vector3d x(0.0, 0.0, 0.1), normal(0.0, 1.0, 0.0);
+  const Eigen::Vector3d vmax = Eigen::Vector3d::Constant(100.0);
+  const Eigen::Vector3d lo(-1.0, -1.0, 0.0), hi(1.0, 1.0, 0.0);
+  Eigen::Vector3d plain, weighted;
+  ik.solve(J, x, vmax, lo, hi, plain);
+  const auto r = ik.solve(J, x, vmax, lo, hi, normal, weighted);
+  EXPECT_TRUE(inhand::has(r.status, IkStatus::position_limited));
+  // Plain: joint 2 free moves (y, z) = (t, t), least squares t = 0.05: 0.05 m/s along the
+  // normal. Weighted (w = 10): t = 0.1 / 101, about 1 mm/s along the normal.
+  EXPECT_NEAR((J * plain - x).y(), 0.05, 1e-12);
+  EXPECT_NEAR((J * weighted - x).y(), 0.1 / 101.0, 1e-12);
+}
+
+TEST(ContactIkPositionLimits, NormalWeightValidationNamesTheField) {
+  inhand::IkParams<double> p;
+  p.limited_normal_weight = 0.5;
+  EXPECT_STREQ(p.validate().field, "ik.limited_normal_weight");
+  p.limited_normal_weight = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_STREQ(p.validate().field, "ik.limited_normal_weight");
+  p.limited_normal_weight = 1.0;
+  EXPECT_TRUE(p.validate().ok());
 }
 
 // ---- FingerServo: coupling and the closed loop at a limit ---------------------------

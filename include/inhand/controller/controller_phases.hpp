@@ -93,7 +93,7 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
                                                        t.config.force_layer.servo_stiffness);
   const ControllerWarning w = sc.fingers[static_cast<std::size_t>(i)].layer3.command(
       m.layer3, m.jacobian, f.joint_positions, v, f.contact.normal, force_active ? &force : nullptr,
-      t.config.max_joint_acceleration, t.dt, fo);
+      t.config.max_joint_acceleration, t.dt, fo, m.state == FingerState::pressing);
   fo.stiffness_estimate = st.forces.stiffness_estimate()(i);
   fo.force_integral = st.forces.integral()(i);
   fo.slipping = sc.forces.slipping(i) != 0;

@@ -6,7 +6,8 @@
 //              u > 0 presses harder), or none when the finger does not touch
 //   qdot     = J^+ e  (damped near singularities; joints that would cross their position
 //              limit less ik.joint_limit_margin within dt held and the task re-solved
-//              over the others; then scaled to the joint velocity limits)
+//              over the others -- a pressing grasp finger's normal weighted by
+//              ik.limited_normal_weight -- then scaled to the joint velocity limits)
 //   |qdot - qdot_last|_inf <= max_joint_acceleration * dt  (the change is scaled,
 //              its direction kept; then clamped back inside the velocity limits and
 //              the position box: a joint the continuity bound would carry past its
@@ -85,11 +86,13 @@ class FingerServo {
   /// when no force is servoed) at the point whose Jacobian is J, joint positions q [rad];
   /// `normal` the measured normal (unused by the motion part). Updates `memory` (servo
   /// integrators, last command); writes the servo command and status, the IK report
-  /// and the joint velocities; returns the warnings raised.
+  /// and the joint velocities; returns the warnings raised. `normal_priority` (with a
+  /// force servoed): when joints are held at their limits, the miss of the re-solve goes to
+  /// the tangent plane rather than along `normal` (ContactIk's normal-priority solve).
   template <typename FingerOutput>
   ControllerWarning command(Memory& memory, const Jacobian& J, const JointVector& q, const Vec& v,
                             const Vec& normal, const Vec* force, Scalar max_joint_acceleration,
-                            Scalar dt, FingerOutput& fo) noexcept {
+                            Scalar dt, FingerOutput& fo, bool normal_priority = false) noexcept {
     ControllerWarning w = ControllerWarning::none;
     fo.servo_status = memory.servo.update(v, Scalar(0), Scalar(0), normal, false, dt, fo.servo);
     if (force != nullptr) {
@@ -98,7 +101,9 @@ class FingerServo {
     }
     if (fo.servo_status != ServoStatus::ok) w |= ControllerWarning::servo_saturated;
     actuated_problem(J, q, dt);
-    if (limits_)
+    if (limits_ && normal_priority && force != nullptr)
+      fo.ik = ik_.solve(ja_, fo.servo.total, vmax_, lo_, hi_, normal, fo.joint_velocities);
+    else if (limits_)
       fo.ik = ik_.solve(ja_, fo.servo.total, vmax_, lo_, hi_, fo.joint_velocities);
     else
       fo.ik = ik_.solve(ja_, fo.servo.total, vmax_, fo.joint_velocities);

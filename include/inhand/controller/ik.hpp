@@ -20,6 +20,11 @@
 // `position_limited`; the report names the held joints (bit i = joint i) and the task
 // error left. Whenever the solution is inside the box it is returned unchanged. The
 // velocity scaling below follows and keeps the box (it only shrinks towards 0).
+// Normal priority (the overload also taking the contact normal n): the free joints may not
+// meet x_dot in every direction, and plain least squares spreads the miss over the normal
+// too (a finger that cannot slide presses harder). It then minimises |W (J theta_dot -
+// x_dot)|^2 + lambda^2 |theta_dot|^2, W = I + (w - 1) n n^T, w = limited_normal_weight: the
+// miss lands in the tangent plane. W acts only when joints are held.
 // Invalid input (non-finite J, x_dot, limits, box or z, or finite values so large that
 // the solution overflows, e.g. |J|^2 > the largest Scalar): theta_dot = 0, status
 // invalid_input.
@@ -30,63 +35,12 @@
 #include <cmath>
 #include <cstdint>
 
+#include "inhand/controller/ik_report.hpp"
 #include "inhand/math/box_least_squares.hpp"
 #include "inhand/math/damped_least_squares.hpp"
 #include "inhand/math/flags.hpp"
 
 namespace inhand {
-
-/// Bit flags of an IK solve. `ok` is 0; damped and limited may be combined.
-enum class IkStatus : unsigned {
-  ok = 0,
-  damped = 1u << 0,   ///< sigma_min below the threshold: damped least squares used
-  limited = 1u << 1,  ///< joint velocities scaled down to respect their limits
-  damped_and_limited = 3u,
-  invalid_input = 1u << 2,     ///< non-finite input; output is zero
-  position_limited = 1u << 3,  ///< joints held at their position limits (see held_joints)
-};
-template <>
-struct is_flags<IkStatus> : std::true_type {};
-inline const char* to_string(IkStatus s) noexcept {
-  switch (s) {
-    case IkStatus::ok:
-      return "ok";
-    case IkStatus::damped:
-      return "damped";
-    case IkStatus::limited:
-      return "limited";
-    case IkStatus::damped_and_limited:
-      return "damped_and_limited";
-    case IkStatus::invalid_input:
-      return "invalid_input";
-    case IkStatus::position_limited:
-      return "position_limited";
-  }
-  switch (static_cast<unsigned>(s)) {
-    case 9u:
-      return "damped_and_position_limited";
-    case 10u:
-      return "limited_and_position_limited";
-    case 11u:
-      return "damped_limited_and_position_limited";
-    default:
-      return "unknown";
-  }
-}
-
-template <typename Scalar>
-struct IkReport {
-  IkStatus status = IkStatus::ok;
-  /// sigma_min of J (m/rad) when min_singular_value_exact; otherwise (IkParams::
-  /// exact_min_singular_value false and sigma_min certified above the threshold) the
-  /// threshold epsilon, a lower bound.
-  Scalar min_singular_value = Scalar(0);
-  bool min_singular_value_exact = true;
-  Scalar damping = Scalar(0);      ///< lambda used (0 when not damped)
-  Scalar limit_scale = Scalar(1);  ///< s applied for the velocity limits
-  std::uint32_t held_joints = 0;   ///< bit i: joint i held at its position limit (i < 32)
-  Scalar task_error = Scalar(0);   ///< |J theta_dot - x_dot| [m/s] of the returned command
-};
 
 /// The joint-velocity box [rad/s] that keeps joint positions q inside
 /// [lower + margin, upper - margin] over a tick of dt seconds: a joint inside may move
@@ -113,10 +67,15 @@ struct IkParams {
   /// epsilon, min_singular_value_exact false); the command is the same (to rounding at
   /// sigma_min = epsilon, where the damping is continuous and 0). true: always.
   bool exact_min_singular_value = false;
+  /// Weight w >= 1 of the contact normal when joints are held (normal priority, top of this
+  /// file); 1: every direction alike.
+  Scalar limited_normal_weight = Scalar(10);
   /// Field names relative to the controller Config ("ik.damping.max_damping").
   Validation validate() const noexcept {
     if (!is_finite(joint_limit_margin) || !(joint_limit_margin >= Scalar(0)))
       return Validation::invalid("ik.joint_limit_margin", "must be finite and >= 0");
+    if (!is_finite(limited_normal_weight) || !(limited_normal_weight >= Scalar(1)))
+      return Validation::invalid("ik.limited_normal_weight", "must be finite and >= 1");
     return damping.validate(
         DampingScheduleNames{"ik.damping.singular_threshold", "ik.damping.max_damping"});
   }
@@ -143,6 +102,7 @@ class ContactIk {
       : params_(params), dls_(dof), box_(dof) {
     ns_.setZero(dof);
     pinv_.setZero(dof, Dim);
+    weighted_.setZero(Dim, dof);
   }
   /// Re-sizes in place for a finger with `dof` joints (run-time DOF only).
   void set_dof(int dof) {
@@ -150,6 +110,7 @@ class ContactIk {
     box_.set_cols(dof);
     ns_.setZero(dof);
     pinv_.setZero(dof, Dim);
+    weighted_.setZero(Dim, dof);
   }
 
   void set_params(const IkParams<Scalar>& p) noexcept { params_ = p; }
@@ -175,6 +136,14 @@ class ContactIk {
                          const JointVector& max_velocity, const JointVector& lo,
                          const JointVector& hi, JointVector& theta_dot) noexcept {
     return solve_impl(J, x_dot, max_velocity, nullptr, theta_dot, &lo, &hi);
+  }
+  /// As the box overload, with `normal` (length > 0; else ignored) weighted by
+  /// IkParams::limited_normal_weight in the re-solve over the box (top of this file).
+  IkReport<Scalar> solve(const Jacobian& J, const CartesianVector& x_dot,
+                         const JointVector& max_velocity, const JointVector& lo,
+                         const JointVector& hi, const CartesianVector& normal,
+                         JointVector& theta_dot) noexcept {
+    return solve_impl(J, x_dot, max_velocity, nullptr, theta_dot, &lo, &hi, &normal);
   }
 
   /// The (damped, per the schedule) pseudo-inverse J^+ that solve() applies.
@@ -205,8 +174,8 @@ class ContactIk {
  private:
   IkReport<Scalar> solve_impl(const Jacobian& J, const CartesianVector& x_dot,
                               const JointVector& max_velocity, const JointVector* z,
-                              JointVector& theta_dot, const JointVector* lo,
-                              const JointVector* hi) noexcept {
+                              JointVector& theta_dot, const JointVector* lo, const JointVector* hi,
+                              const CartesianVector* normal = nullptr) noexcept {
     IkReport<Scalar> report;
     const bool boxed = lo != nullptr && hi != nullptr;
     if (!all_finite(J) || !all_finite(x_dot) || (z != nullptr && !all_finite(*z)) ||
@@ -241,7 +210,19 @@ class ContactIk {
     }
     if (boxed &&
         !((theta_dot.array() >= lo->array()).all() && (theta_dot.array() <= hi->array()).all())) {
-      const auto held = box_.solve(J, x_dot, report.damping * report.damping, *lo, *hi, theta_dot);
+      const Scalar l2 = report.damping * report.damping;
+      const Scalar length = normal != nullptr ? normal->norm() : Scalar(0);
+      const Scalar extra = params_.limited_normal_weight - Scalar(1);  // w - 1
+      BoxLeastSquaresResult<Scalar> held;
+      if (extra > Scalar(0) && length > Scalar(0) && is_finite(length)) {
+        // W J and W x_dot with W = I + (w - 1) n n^T, n the unit normal.
+        const CartesianVector n = *normal / length;
+        weighted_.noalias() = J + (extra * n) * (n.transpose() * J);
+        const CartesianVector b = x_dot + (extra * n.dot(x_dot)) * n;
+        held = box_.solve(weighted_, b, l2, *lo, *hi, theta_dot);
+      } else {
+        held = box_.solve(J, x_dot, l2, *lo, *hi, theta_dot);
+      }
       report.held_joints = held.held;
       if (held.held != 0) report.status = report.status | IkStatus::position_limited;
     }
@@ -274,6 +255,7 @@ class ContactIk {
   BoxLeastSquares<Scalar, Dim, N, MaxN> box_;
   JointVector ns_;
   PseudoInverse pinv_;
+  Jacobian weighted_;  ///< W J of the normal-priority re-solve
 };
 
 }  // namespace inhand
