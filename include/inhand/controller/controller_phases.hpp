@@ -46,7 +46,7 @@ void run_force_layer(const TickInput<Types>& t, bool object_free, ControllerStat
       // Fingertip displacement since the last tick, through the last tick's Jacobian.
       if (m.has_q_prev) {
         m.q_prev = f.joint_positions - m.q_prev;  // the joint step (no temporary)
-        sc.tip_steps.col(i).noalias() = m.jacobian * m.q_prev;
+        sc.tip_steps.col(i) = columns_times(m.jacobian, m.q_prev);
       }
     }
     m.q_prev = f.joint_positions;

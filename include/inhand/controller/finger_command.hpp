@@ -70,9 +70,11 @@ class FingerServo {
     upper_ = chain.upper_limits();
     leader_.setConstant(dof, -1);
     ratio_.setOnes(dof);
+    coupled_ = false;
     for (int i = 0; i < dof; ++i) {
       leader_(i) = chain.joints[i].coupling.leader;
       ratio_(i) = chain.joints[i].coupling.ratio;
+      if (leader_(i) >= 0) coupled_ = true;
     }
     limits_ = ik_params.joint_limits;
     margin_ = ik_params.joint_limit_margin;
@@ -101,12 +103,15 @@ class FingerServo {
     }
     if (fo.servo_status != ServoStatus::ok) w |= ControllerWarning::servo_saturated;
     actuated_problem(J, q, dt);
+    // Without couplings the actuated problem is the joint one: no copy of J or the limits.
+    const Jacobian& ja = coupled_ ? ja_ : J;
+    const JointVector& vmax = coupled_ ? vmax_ : max_velocity_;
     if (limits_ && normal_priority && force != nullptr)
-      fo.ik = ik_.solve(ja_, fo.servo.total, vmax_, lo_, hi_, normal, fo.joint_velocities);
+      fo.ik = ik_.solve(ja, fo.servo.total, vmax, lo_, hi_, normal, fo.joint_velocities);
     else if (limits_)
-      fo.ik = ik_.solve(ja_, fo.servo.total, vmax_, lo_, hi_, fo.joint_velocities);
+      fo.ik = ik_.solve(ja, fo.servo.total, vmax, lo_, hi_, fo.joint_velocities);
     else
-      fo.ik = ik_.solve(ja_, fo.servo.total, vmax_, fo.joint_velocities);
+      fo.ik = ik_.solve(ja, fo.servo.total, vmax, fo.joint_velocities);
     follow_leaders(fo.joint_velocities);
     if (has(fo.ik.status, IkStatus::damped)) w |= ControllerWarning::ik_damped;
     if (has(fo.ik.status, IkStatus::limited)) w |= ControllerWarning::joint_velocity_limited;
@@ -121,7 +126,7 @@ class FingerServo {
         // A convex combination of two commands within the velocity limits: only rounding
         // can leave them; clamp it away (this only shrinks the step). The position box
         // may be left (last tick's command was for last tick's box): stop there.
-        fo.joint_velocities = fo.joint_velocities.cwiseMin(vmax_).cwiseMax(-vmax_);
+        fo.joint_velocities = fo.joint_velocities.cwiseMin(vmax).cwiseMax(-vmax);
         if (limits_) {
           for (int i = 0; i < static_cast<int>(lo_.size()); ++i) {
             const Scalar c = std::min(std::max(fo.joint_velocities(i), lo_(i)), hi_(i));
@@ -138,12 +143,13 @@ class FingerServo {
   }
 
  private:
-  /// ja_, vmax_, lo_, hi_: this tick's problem in actuated coordinates (followers'
-  /// columns zero and bounds 0, folded into their leaders).
+  /// lo_, hi_ and, for a chain with couplings, ja_ and vmax_: this tick's problem in
+  /// actuated coordinates (followers' columns zero and bounds 0, folded into their leaders).
   void actuated_problem(const Jacobian& J, const JointVector& q, Scalar dt) noexcept {
+    if (limits_) joint_position_box(q, lower_, upper_, margin_, dt, lo_, hi_);
+    if (!coupled_) return;
     ja_ = J;
     vmax_ = max_velocity_;
-    if (limits_) joint_position_box(q, lower_, upper_, margin_, dt, lo_, hi_);
     for (int i = 0; i < static_cast<int>(leader_.size()); ++i) {
       const int l = leader_(i);
       if (l < 0) continue;
@@ -173,6 +179,7 @@ class FingerServo {
   IndexVector leader_{};           ///< per joint: its leader, or -1 (actuated)
   JointVector ratio_{};            ///< per joint: its coupling ratio
   bool limits_ = true;
+  bool coupled_ = false;  ///< some joint follows a leader
   Scalar margin_ = Scalar(0);
   // This tick's actuated problem (written and read within command()).
   Jacobian ja_{};

@@ -20,11 +20,13 @@
 // squeezing a grasp whose contacts lie slightly off the object's equator is still a
 // squeeze. The projection never holds a rigid component: it shrinks it by
 // eps / (sigma^2 + eps) < 1 every tick.
-// build() factorises A^T A + eps I once per tick; project_internal() then costs two
-// small products and a W x W solve. noexcept; fixed finger counts never allocate.
+// Evaluated as P_int = eps (A A^T + eps I)^-1 (the same matrix: A (A^T A + eps I)^-1 =
+// (A A^T + eps I)^-1 A), an n x n system for n fingers instead of a W x W one: build()
+// factorises A A^T + eps I (Cholesky; its eigenvalues are >= eps > 0) once per tick, and
+// project_internal() is two triangular substitutions. noexcept; fixed finger counts never
+// allocate.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <cmath>
 
 #include "inhand/math/types.hpp"
@@ -45,13 +47,12 @@ class GraspMap {
   /// Sizes the map (allocates only for a run-time finger count).
   void resize(int fingers) {
     a_.setZero(fingers, W);
-    // A factorisation in a defined state (an uncomputed Eigen::LDLT holds indeterminate
-    // members, which copying the map would read).
-    ldlt_.compute(Eigen::Matrix<Scalar, W, W>::Identity());
+    chol_.setIdentity(fingers, fingers);  // with eps_ = 1: P_int = I until build()
+    inv_diag_.setOnes(fingers);
   }
 
   /// Builds A for the touching fingers (columns of `points` / `normals` of the others
-  /// are ignored) and factorises A^T A + eps I.
+  /// are ignored) and factorises A A^T + eps I (eps > 0).
   void build(const Mask& touching, const Points& points, const Points& normals,
              const Vec& object_position, Scalar eps) noexcept {
     const int n = static_cast<int>(a_.rows());
@@ -74,18 +75,37 @@ class GraspMap {
       a_.row(i).template tail<R>() =
           (moment(Vec(points.col(i) - object_position), nrm) / lever_).transpose();
     }
-    Eigen::Matrix<Scalar, W, W> m;
-    m.noalias() = a_.transpose() * a_;
-    m.diagonal().array() += eps;
-    ldlt_.compute(m);
+    eps_ = eps;
+    // Lower Cholesky factor of A A^T + eps I into chol_, column by column (a row of a
+    // finger that does not touch is zero: its pivot is sqrt(eps), its column zero below).
+    for (int c = 0; c < n; ++c) {
+      Scalar d = a_.row(c).squaredNorm() + eps;
+      for (int p = 0; p < c; ++p) d -= chol_(c, p) * chol_(c, p);
+      d = std::sqrt(d);
+      chol_(c, c) = d;
+      inv_diag_(c) = Scalar(1) / d;
+      for (int r = c + 1; r < n; ++r) {
+        Scalar v = a_.row(r).dot(a_.row(c));
+        for (int p = 0; p < c; ++p) v -= chol_(r, p) * chol_(c, p);
+        chol_(r, c) = v * inv_diag_(c);
+      }
+    }
   }
 
-  /// x <- P_int x.
+  /// x <- P_int x = eps (A A^T + eps I)^-1 x.
   void project_internal(ForceVector& x) const noexcept {
-    Wrench w;
-    w.noalias() = a_.transpose() * x;
-    const Wrench y = ldlt_.solve(w);
-    x.noalias() -= a_ * y;
+    const int n = static_cast<int>(x.size());
+    for (int r = 0; r < n; ++r) {  // L y = x
+      Scalar v = x(r);
+      for (int p = 0; p < r; ++p) v -= chol_(r, p) * x(p);
+      x(r) = v * inv_diag_(r);
+    }
+    for (int r = n - 1; r >= 0; --r) {  // L^T z = y
+      Scalar v = x(r);
+      for (int p = r + 1; p < n; ++p) v -= chol_(p, r) * x(p);
+      x(r) = v * inv_diag_(r);
+    }
+    x *= eps_;
   }
 
   /// The wrench (force N; torque N m about p_o) that normal forces f balance:
@@ -110,7 +130,9 @@ class GraspMap {
   }
 
   Eigen::Matrix<Scalar, NumFingers, W> a_;
-  Eigen::LDLT<Eigen::Matrix<Scalar, W, W>> ldlt_;
+  Eigen::Matrix<Scalar, NumFingers, NumFingers> chol_;  ///< lower factor of A A^T + eps I
+  ForceVector inv_diag_;                                ///< 1 / its diagonal
+  Scalar eps_ = Scalar(1);
   Scalar lever_ = Scalar(1);
 };
 

@@ -178,9 +178,9 @@ class ContactIk {
                               const CartesianVector* normal = nullptr) noexcept {
     IkReport<Scalar> report;
     const bool boxed = lo != nullptr && hi != nullptr;
-    if (!all_finite(J) || !all_finite(x_dot) || (z != nullptr && !all_finite(*z)) ||
-        !((max_velocity.array() > Scalar(0)).all()) || max_velocity.hasNaN() ||
-        (boxed && !box_valid(*lo, *hi, static_cast<int>(J.cols())))) {
+    // J is checked by the factorisation below (a non-finite J makes it invalid).
+    if (!all_finite(x_dot) || (z != nullptr && !all_finite(*z)) ||
+        !limits_valid(max_velocity, lo, hi, static_cast<int>(J.cols()))) {
       theta_dot.setZero();
       report.status = IkStatus::invalid_input;
       return report;
@@ -240,14 +240,25 @@ class ContactIk {
       report.status = report.status | IkStatus::limited;
     }
     report.limit_scale = s;
-    report.task_error = (J * theta_dot - x_dot).norm();
+    report.task_error = (columns_times(J, theta_dot) - x_dot).norm();
     return report;
   }
 
-  /// A box [lo, hi] of this solver's size, finite, with lo <= 0 <= hi.
-  static bool box_valid(const JointVector& lo, const JointVector& hi, int n) noexcept {
-    return lo.size() == n && hi.size() == n && all_finite(lo) && all_finite(hi) &&
-           (lo.array() <= Scalar(0)).all() && (hi.array() >= Scalar(0)).all();
+  /// Velocity limits > 0 (NaN fails), and a box [lo, hi] (if given) of this solver's size,
+  /// finite, with lo <= 0 <= hi. One pass, the tests combined without branches.
+  static bool limits_valid(const JointVector& max_velocity, const JointVector* lo,
+                           const JointVector* hi, int n) noexcept {
+    bool ok = max_velocity.size() == n;
+    const bool boxed = lo != nullptr && hi != nullptr;
+    if (boxed) ok = ok && lo->size() == n && hi->size() == n;
+    if (!ok) return false;
+    for (int i = 0; i < n; ++i) ok &= max_velocity(i) > Scalar(0);
+    if (boxed) {
+      for (int i = 0; i < n; ++i)
+        ok &= ((*lo)(i) <= Scalar(0)) & ((*hi)(i) >= Scalar(0)) & is_finite((*lo)(i)) &
+              is_finite((*hi)(i));
+    }
+    return ok;
   }
 
   IkParams<Scalar> params_;

@@ -75,8 +75,15 @@ class DampedLeastSquares {
     factored_ = false;
     if (!all_finite(J) || k_ < 1) return r;
     wide_ = n_ >= M;
-    if (wide_) {
+    if (wide_ && N != Eigen::Dynamic) {
       gram_.template topLeftCorner<M, M>().noalias() = J * J.transpose();
+    } else if (wide_) {  // run-time N: a sum of outer products of the fixed-size columns
+      Eigen::Matrix<Scalar, M, M> g = Eigen::Matrix<Scalar, M, M>::Zero();
+      for (int c = 0; c < n_; ++c) {
+        const Eigen::Matrix<Scalar, M, 1> v = J.col(c);
+        g.noalias() += v * v.transpose();
+      }
+      gram_.template topLeftCorner<M, M>() = g;
     } else {
       for (int a = 0; a < k_; ++a)
         for (int b = a; b < k_; ++b) gram_(a, b) = gram_(b, a) = J.col(a).dot(J.col(b));

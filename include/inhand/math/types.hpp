@@ -54,10 +54,26 @@ inline Vector<Scalar, 2> angular_cross(const AngularVector<Scalar, 2>& omega,
 /// True when every coefficient is finite (no NaN, no +-inf).
 template <typename Derived>
 inline bool all_finite(const Eigen::MatrixBase<Derived>& m) noexcept {
-  // (x - x) == 0 is false exactly for NaN and +-inf, and does not raise FE_INVALID
-  // for quiet NaN on IEEE hardware.
-  return ((m.derived().array() - m.derived().array()) == 0).all();
+  // x * 0 is 0 for every finite x and NaN for NaN and +-inf, so the sum is 0 exactly when
+  // all are finite (a sum of zeros cannot overflow); one branch, and a reduction the
+  // compiler vectorises, instead of a test per coefficient. Like (x - x) == 0, it does not
+  // raise FE_INVALID for quiet NaN on IEEE hardware.
+  using Scalar = typename Derived::Scalar;
+  return (m.derived().array() * Scalar(0)).sum() == Scalar(0);
 }
+/// J x for a J with a fixed row count (a contact Jacobian: Dim rows) and any column count,
+/// as the sum of x_c times column c. For a run-time column count Eigen's general product
+/// costs several times as much at these sizes; for a fixed one the loop unrolls.
+template <typename DerivedJ, typename DerivedX>
+inline Eigen::Matrix<typename DerivedJ::Scalar, DerivedJ::RowsAtCompileTime, 1> columns_times(
+    const Eigen::MatrixBase<DerivedJ>& J, const Eigen::MatrixBase<DerivedX>& x) noexcept {
+  static_assert(DerivedJ::RowsAtCompileTime != Eigen::Dynamic, "a fixed row count");
+  using Out = Eigen::Matrix<typename DerivedJ::Scalar, DerivedJ::RowsAtCompileTime, 1>;
+  Out r = Out::Zero();
+  for (Eigen::Index c = 0; c < J.cols(); ++c) r += J.col(c) * x(c);
+  return r;
+}
+
 template <typename Scalar, typename = std::enable_if_t<std::is_floating_point<Scalar>::value>>
 inline bool is_finite(Scalar x) noexcept {
   return (x - x) == Scalar(0);
