@@ -211,7 +211,11 @@ Sweep sweep_position_limits(std::uint64_t seed, int calls) {
       // only may come back inside with none held).
       EXPECT_EQ(inhand::has(rep.status, IkStatus::position_limited), rep.held_joints != 0u)
           << "call " << c;
-      EXPECT_NEAR(rep.task_error, (J * qd - x).norm(), 1e-15) << "call " << c;
+      // The residual of the returned command, to the rounding of J qd - x (n + 1 terms per
+      // row, summed in any order: at most (n + 1) eps (|J| |qd| + |x|) per row).
+      const double rounding = (N + 1) * std::numeric_limits<double>::epsilon() *
+                              ((J.cwiseAbs() * qd.cwiseAbs()).norm() + x.norm());
+      EXPECT_NEAR(rep.task_error, (J * qd - x).norm(), rounding) << "call " << c;
       // Without velocity scaling the task error is the least the box allows.
       if (rep.limit_scale == 1.0 && c % 10 == 1) {
         const double l2 = rep.damping * rep.damping;

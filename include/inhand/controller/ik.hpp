@@ -245,18 +245,18 @@ class ContactIk {
   }
 
   /// Velocity limits > 0 (NaN fails), and a box [lo, hi] (if given) of this solver's size,
-  /// finite, with lo <= 0 <= hi. One pass, the tests combined without branches.
+  /// finite, with lo <= 0 <= hi. One pass over the joints.
   static bool limits_valid(const JointVector& max_velocity, const JointVector* lo,
                            const JointVector* hi, int n) noexcept {
     bool ok = max_velocity.size() == n;
     const bool boxed = lo != nullptr && hi != nullptr;
     if (boxed) ok = ok && lo->size() == n && hi->size() == n;
     if (!ok) return false;
-    for (int i = 0; i < n; ++i) ok &= max_velocity(i) > Scalar(0);
+    for (int i = 0; i < n; ++i) ok = ok && max_velocity(i) > Scalar(0);
     if (boxed) {
       for (int i = 0; i < n; ++i)
-        ok &= ((*lo)(i) <= Scalar(0)) & ((*hi)(i) >= Scalar(0)) & is_finite((*lo)(i)) &
-              is_finite((*hi)(i));
+        ok = ok && (*lo)(i) <= Scalar(0) && (*hi)(i) >= Scalar(0) && is_finite((*lo)(i)) &&
+             is_finite((*hi)(i));
     }
     return ok;
   }
