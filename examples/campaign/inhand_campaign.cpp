@@ -254,6 +254,10 @@ int main(int argc, char** argv) {
       "--wide", wide,
       "widened ranges: mass 0.02-0.4 kg, friction 0.4-1.2, gravity along +-X/Y/Z, stiffness "
       "500 N/m-50 kN/m, lag 0-10 ms, delay 0-1 tick, +-0.1 N bias on one finger");
+  bool keep_in_reach = false;
+  app.add_flag("--keep-twist-in-reach", keep_in_reach,
+               "controller Config::keep_twist_in_reach: cut the object twist where a joint held "
+               "at its limit cannot follow");
   std::string trace;
   app.add_option("--trace", trace, "per-tick trace CSV of the one case run (needs --count 1)");
   CLI11_PARSE(app, argc, argv);
@@ -268,7 +272,8 @@ int main(int argc, char** argv) {
   std::vector<std::uint64_t> failing;
   for (long k = 0; k < count; ++k) {
     const std::uint64_t seed = first + static_cast<std::uint64_t>(k);
-    const Case c = make_case(seed, wide);
+    Case c = make_case(seed, wide);
+    c.spec.controller.keep_twist_in_reach = keep_in_reach;
     const Outcome o = evaluate(c, trace);
     if (o.success) {
       ++ok;

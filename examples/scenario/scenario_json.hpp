@@ -198,6 +198,7 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
   c.max_tick = r.number("max_tick", c.max_tick, Range::positive_up_to(1.0));
   c.max_joint_acceleration =
       r.limit("max_joint_acceleration", c.max_joint_acceleration, Range::positive_up_to(1e9));
+  c.keep_twist_in_reach = r.boolean("keep_twist_in_reach", c.keep_twist_in_reach);
   {
     ObjectReader f = r.object("pose_feedback");
     PoseFeedback<double>& pf = c.pose_feedback;

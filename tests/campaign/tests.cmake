@@ -14,4 +14,15 @@ if(INHAND_HAVE_CAMPAIGN)
            COMMAND inhand_campaign --wide --first-seed 988 --count 1 --min-success 1)
   set_tests_properties(campaign.wide_grasp_at_a_joint_limit campaign.wide_grasp_at_a_joint_limit_988
                        PROPERTIES LABELS campaign TIMEOUT 120)
+  # Wide-range cases whose thumb reaches a joint limit during the task: the other fingers
+  # carried the object on and the grasp deformed until a contact opened (481: dropped;
+  # 550: dropped). With the twist kept within reach the object stops at the limit and
+  # comes back with the reciprocating task, within the campaign's bounds.
+  foreach(seed 481 550)
+    add_test(NAME campaign.wide_thumb_at_a_limit_kept_in_reach_${seed}
+             COMMAND inhand_campaign --wide --first-seed ${seed} --count 1 --min-success 1
+                     --keep-twist-in-reach)
+    set_tests_properties(campaign.wide_thumb_at_a_limit_kept_in_reach_${seed}
+                         PROPERTIES LABELS campaign TIMEOUT 120)
+  endforeach()
 endif()

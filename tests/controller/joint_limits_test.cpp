@@ -11,13 +11,18 @@
 //  - with the contact normal weighted (the normal-priority solve), the miss of a held
 //    re-solve moves off the normal into the tangent plane, never more along the normal
 //    than the plain solve's, at the least weighted objective the box allows;
+//  - a joint held at its bound puts the contact velocities on its side of the other
+//    joints' columns out of reach (the IK misses them, meets the other side) for a finger
+//    with as many joints as dimensions; a redundant finger reaches around it;
 //  - the configuration checks name the coupling, margin and normal-weight fields.
 #include <gtest/gtest.h>
 
 #include <Eigen/QR>
+#include <Eigen/SVD>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "common/test_support.hpp"
 #include "inhand/controller/finger_command.hpp"
@@ -480,6 +485,125 @@ TEST(CoupledJoints, ValidationNamesTheField) {
   inhand::IkParams<double> ikp;
   ikp.joint_limit_margin = -0.1;
   EXPECT_STREQ(ikp.validate().field, "ik.joint_limit_margin");
+}
+
+// ---- FingerServo: the contact directions a held joint puts out of reach ---------------
+
+/// The directions for_each_unreachable_direction() reports for the fingertip point.
+template <typename Chain, typename Servo>
+std::vector<Eigen::Vector3d> unreachable(Servo& servo, const Chain& chain,
+                                         const typename Servo::JointVector& q,
+                                         typename Servo::Jacobian& J) {
+  inhand::FingerKinematics<Chain> ws(chain);
+  inhand::forward_kinematics(chain, q, ws);
+  inhand::point_jacobian(ws, ws.fingertip.position, J);
+  std::vector<Eigen::Vector3d> out;
+  servo.for_each_unreachable_direction(J, q, 1e-3, 1e-4,
+                                       [&](const Eigen::Vector3d& b) { out.push_back(b); });
+  return out;
+}
+
+TEST(WorkspaceLimits, AHeldJointOfASquareFingerPutsOneSideOutOfReach) {
+  using Chain3 = inhand::FingerChain<double, 3, 3>;
+  using Servo3 = inhand::FingerServo<double, 3, 3>;
+  const Chain3 chain = inhand_test::make_finger<Chain3>(3);
+  inhand::IkParams<double> ikp;
+  ikp.joint_limit_margin = 0.01;
+  inhand::ServoGains<double> gains;
+  auto rng = make_rng(47);
+  int checked = 0, met = 0;
+  for (int k = 0; k < scaled(300); ++k) {
+    Servo3 servo;
+    Servo3::Memory memory;
+    servo.configure(chain, ikp);
+    memory.configure(3, gains);
+    Eigen::Vector3d q;  // every joint well inside its range, then joint j at a bound
+    for (int i = 0; i < 3; ++i)
+      q(i) = chain.joints[i].lower +
+             uniform(rng, 0.2, 0.8) * (chain.joints[i].upper - chain.joints[i].lower);
+    const int j = static_cast<int>(uniform(rng, 0.0, 2.999));
+    const bool up = uniform(rng, 0.0, 1.0) < 0.5;
+    Eigen::Matrix3d J;
+    // Away from the held bound (by more than the tolerance): nothing is out of reach.
+    q(j) = up ? chain.joints[j].upper - 0.01 - 1e-3 : chain.joints[j].lower + 0.01 + 1e-3;
+    EXPECT_FALSE(servo.at_position_limit(q, 1e-4)) << "case " << k;
+    EXPECT_TRUE(unreachable(servo, chain, q, J).empty()) << "case " << k;
+    // At the held bound: one direction, normal to the other joints' columns, on the
+    // held joint's side.
+    q(j) = up ? chain.joints[j].upper - 0.01 : chain.joints[j].lower + 0.01;
+    EXPECT_TRUE(servo.at_position_limit(q, 1e-4)) << "case " << k;
+    const std::vector<Eigen::Vector3d> b = unreachable(servo, chain, q, J);
+    if (J.jacobiSvd().singularValues()(2) < 1e-3) continue;  // near-singular: the IK's damping
+    ++checked;
+    ASSERT_EQ(b.size(), 1u) << "case " << k;
+    EXPECT_NEAR(b[0].norm(), 1.0, 1e-12);
+    for (int i = 0; i < 3; ++i) {
+      if (i == j) continue;
+      EXPECT_LT(std::abs(b[0].dot(J.col(i))), 1e-9 * J.norm()) << "case " << k;
+    }
+    EXPECT_GT((up ? 1.0 : -1.0) * b[0].dot(J.col(j)), 0.0) << "case " << k;
+    // The IK agrees: a velocity into b is missed (the joint is held), one away from it
+    // is met.
+    struct {
+      inhand::ServoCommand<double, 3> servo{};
+      inhand::ServoStatus servo_status{};
+      inhand::IkReport<double> ik{};
+      Eigen::Vector3d joint_velocities = Eigen::Vector3d::Zero();
+    } fo;
+    const double inf = std::numeric_limits<double>::infinity();
+    servo.command(memory, J, q, 0.01 * b[0], Eigen::Vector3d::UnitY(), nullptr, inf, 1e-3, fo);
+    EXPECT_TRUE(inhand::has(fo.ik.status, IkStatus::position_limited)) << "case " << k;
+    EXPECT_GT(fo.ik.task_error, 1e-3) << "case " << k;
+    memory.configure(3, gains);
+    servo.command(memory, J, q, -0.01 * b[0], Eigen::Vector3d::UnitY(), nullptr, inf, 1e-3, fo);
+    if (fo.ik.status == IkStatus::ok) {  // neither damped nor scaled to the speed limits
+      ++met;
+      EXPECT_LT(fo.ik.task_error, 1e-9) << "case " << k;
+    }
+  }
+  EXPECT_GT(checked, scaled(300) / 2);
+  EXPECT_GT(met, 0);
+  // Joint limits off: nothing is held, nothing out of reach.
+  ikp.joint_limits = false;
+  Servo3 off;
+  off.configure(chain, ikp);
+  Eigen::Vector3d q(chain.joints[0].upper, 0.3, 0.3);
+  Eigen::Matrix3d J;
+  EXPECT_FALSE(off.at_position_limit(q, 1e-4));
+  EXPECT_TRUE(unreachable(off, chain, q, J).empty());
+}
+
+TEST(WorkspaceLimits, ARedundantFingerReachesAroundAHeldJoint) {
+  const Chain4 chain = inhand_test::make_finger<Chain4>(4);
+  inhand::IkParams<double> ikp;
+  auto rng = make_rng(53);
+  int free = 0;
+  for (int k = 0; k < scaled(300); ++k) {
+    Servo4 servo;
+    servo.configure(chain, ikp);
+    Eigen::Vector4d q;
+    for (int i = 0; i < 4; ++i)
+      q(i) = chain.joints[i].lower +
+             uniform(rng, 0.2, 0.8) * (chain.joints[i].upper - chain.joints[i].lower);
+    const int j = static_cast<int>(uniform(rng, 0.0, 3.999));
+    q(j) = chain.joints[j].upper - ikp.joint_limit_margin;
+    Eigen::Matrix<double, 3, 4> J;
+    const std::vector<Eigen::Vector3d> b = unreachable(servo, chain, q, J);
+    Eigen::Matrix3d others;
+    for (int i = 0, c = 0; i < 4; ++i)
+      if (i != j) others.col(c++) = J.col(i);
+    const double smin = others.jacobiSvd().singularValues()(2);
+    // The other three columns span the space: every contact velocity stays in reach.
+    if (smin > 1e-2 * J.norm()) {
+      ++free;
+      EXPECT_TRUE(b.empty()) << "case " << k << " joint " << j;
+    }
+    // Whatever is reported is (to the rank tolerance, sigma ratio 1e-3) normal to the
+    // other columns.
+    for (const Eigen::Vector3d& d : b)
+      EXPECT_LT((d.transpose() * others).norm(), 1.01e-3 * J.norm()) << "case " << k;
+  }
+  EXPECT_GT(free, 0);
 }
 
 }  // namespace

@@ -101,6 +101,14 @@ struct ControllerTypes {
     /// contact is still used (soft pads, calibration offsets), but flagged: the finger's
     /// FingerOutput::implausible_contact and the warning implausible_contact.
     Scalar contact_tolerance = Scalar(0.01);
+    /// Joint limits (ik.joint_limits) as a constraint on the object twist
+    /// (workspace_limits.hpp). The warning workspace_limited is raised either way when the
+    /// commanded twist asks a touching contact to move, along its normal, where a joint
+    /// held at its position limit cannot follow. true: the twist is also cut there, so the
+    /// object stops at the edge of the hand's workspace instead of being carried on by the
+    /// other fingers (which deforms the grasp). false (default): the twist is left alone;
+    /// the held finger rolls or slides on the object if it can.
+    bool keep_twist_in_reach = false;
     /// start_manipulation() refuses a trajectory whose start pose is farther than this
     /// from the measured object pose (m, and rad of the rotation between them); > 0.
     Scalar start_position_tolerance = Scalar(0.01);

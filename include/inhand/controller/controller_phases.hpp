@@ -11,6 +11,7 @@
 #include "inhand/controller/controller_state.hpp"
 #include "inhand/controller/finger_motion.hpp"
 #include "inhand/controller/trajectory.hpp"
+#include "inhand/controller/workspace_limits.hpp"
 #include "inhand/kinematics/contact_kinematics.hpp"
 
 namespace inhand {
@@ -113,13 +114,6 @@ FingerPoints<Types> finger_points(const TickInput<Types>& t, int i, TickScratch<
   return points;
 }
 
-template <typename Types>
-void remember_contact(FingerMemory<Types>& m, const typename Types::TactileContact& c,
-                      const typename Types::PoseT& object) noexcept {
-  m.last_contact_object = object.rotation.transpose() * (c.contact_point - object.position);
-  m.last_normal_object = object.rotation.transpose() * c.normal;
-}
-
 }  // namespace detail
 
 /// Start of the grasp phase towards `targets` (validated): each finger's target, its
@@ -180,7 +174,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
       if (m.state == FingerState::approaching) m.layer3.servo.reset_force();
       m.state = FingerState::pressing;
       m.touched = true;
-      detail::remember_contact(m, f.contact, t.object);
+      m.remember_contact(f.contact, t.object);
       const PressStep<Scalar, Types::kDim> press =
           press_step(g, m.target, f.contact.contact_point, f.contact.normal, t.dt, m.settle);
       // Once placed, the finger presses still: sliding on under the full force would load
@@ -242,7 +236,6 @@ ControllerStatus manipulation_phase(
   if (pose.integral_limited) w |= ControllerWarning::pose_integral_limited;
   if (pose.twist_limited) w |= ControllerWarning::twist_limited;
   out.pose_error = pose.pose_error;
-  out.commanded_twist = pose.commanded_twist;
   out.pose_error_integral = st.pose_loop.integral();
   // Layer 2: the planner's force pattern, then the force layer.
   for (int i = 0; i < n; ++i) {
@@ -264,7 +257,11 @@ ControllerStatus manipulation_phase(
   if (has(fs, ForceLayerStatus::grip_raised)) w |= ControllerWarning::grip_raised;
   if (has(fs, ForceLayerStatus::beyond_capacity)) w |= ControllerWarning::beyond_capacity;
   if (has(fs, ForceLayerStatus::integral_limited)) w |= ControllerWarning::force_integral_limited;
-  // Layers 2-3 per finger.
+  // Layers 2-3 per finger, with the twist kept within reach (workspace_limits.hpp).
+  typename Types::TwistT twist = pose.commanded_twist;
+  if (detail::keep_twist_in_reach<Types>(t, st, sc, twist))
+    w |= ControllerWarning::workspace_limited;
+  out.commanded_twist = twist;
   bool lost = false;
   for (int i = 0; i < n; ++i) {
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
@@ -274,9 +271,9 @@ ControllerStatus manipulation_phase(
     if (f.contact.touching) {
       if (m.state == FingerState::reacquiring) m.layer3.servo.reset_force();
       m.state = FingerState::in_contact;
-      detail::remember_contact(m, f.contact, t.object);
-      const Vec v = contact_point_velocity<Scalar, Types::kDim>(
-          pose.commanded_twist, f.contact.contact_point, t.object.position);
+      m.remember_contact(f.contact, t.object);
+      const Vec v = contact_point_velocity<Scalar, Types::kDim>(twist, f.contact.contact_point,
+                                                                t.object.position);
       w |= detail::command_finger(t, i, points, f.contact.contact_point, v, true, st, sc, fo);
     } else {
       lost = true;
@@ -287,9 +284,8 @@ ControllerStatus manipulation_phase(
       const Vec nrm = t.object.rotation * m.last_normal_object;
       const Vec p_t = t.object.transform_point(m.last_contact_object);
       const Vec p_v = points.virtual_point(nrm);
-      const Vec v =
-          approach_velocity(t.config.grasp, p_v, p_t, nrm) +
-          contact_point_velocity<Scalar, Types::kDim>(pose.commanded_twist, p_t, t.object.position);
+      const Vec v = approach_velocity(t.config.grasp, p_v, p_t, nrm) +
+                    contact_point_velocity<Scalar, Types::kDim>(twist, p_t, t.object.position);
       w |= detail::command_finger(t, i, points, p_v, v, false, st, sc, fo);
     }
   }

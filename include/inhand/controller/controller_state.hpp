@@ -42,6 +42,12 @@ struct FingerMemory {
   ForceGate<Scalar> force_gate{};
   Vec last_contact_object = Vec::Zero();  ///< m, last contact point, object frame
   Vec last_normal_object = Vec::UnitX();  ///< last outward normal, object frame
+  /// Keeps contact c (world frame) in the object frame of `object`.
+  void remember_contact(const typename Types::TactileContact& c,
+                        const typename Types::PoseT& object) noexcept {
+    last_contact_object = object.rotation.transpose() * (c.contact_point - object.position);
+    last_normal_object = object.rotation.transpose() * c.normal;
+  }
 };
 
 template <typename Types>

@@ -108,6 +108,9 @@ enum class ControllerWarning : unsigned {
   pose_integral_limited = 1u << 14,   ///< layer 1's pose-error integral reached its bound
   implausible_contact = 1u << 15,     ///< some contact is far from / behind its fingertip
   joint_position_limited = 1u << 16,  ///< some joint was held at its position limit (IK)
+  /// the object twist asks a touching contact to move, along its normal, where a joint
+  /// held at its limit cannot follow (workspace_limits.hpp); cut when keep_twist_in_reach
+  workspace_limited = 1u << 17,
 };
 template <>
 struct is_flags<ControllerWarning> : std::true_type {};

@@ -21,7 +21,9 @@
 // bounded DOF).
 #pragma once
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "inhand/controller/controller_status.hpp"
@@ -140,6 +142,52 @@ class FingerServo {
     }
     memory.last_command = fo.joint_velocities;
     return w;
+  }
+
+  /// Whether some actuated joint is within `tolerance` [rad] of the bound the IK holds it
+  /// at (its position limit less ik.joint_limit_margin), or past it; false when joint
+  /// limits are off. q [rad]. No kinematics: a few comparisons per joint.
+  bool at_position_limit(const JointVector& q, Scalar tolerance) const noexcept {
+    if (!limits_) return false;
+    for (int i = 0; i < static_cast<int>(q.size()); ++i)
+      if (leader_(i) < 0 &&
+          (q(i) >= upper_(i) - margin_ - tolerance || q(i) <= lower_(i) + margin_ + tolerance))
+        return true;
+    return false;
+  }
+
+  /// The contact directions out of reach this tick (workspace_limits.hpp): for each
+  /// actuated joint within `tolerance` [rad] of its held bound whose motion the finger's
+  /// other actuated joints cannot make (their columns' span has lost a dimension), calls
+  /// visit(b) with the unit vector b (world frame) such that a contact velocity x with
+  /// b^T x > 0 needs that joint past its bound. J (Dim x DOF) is the Jacobian of the
+  /// contact point, q the joint positions [rad], dt [s] the tick.
+  template <typename Visit>
+  void for_each_unreachable_direction(const Jacobian& J, const JointVector& q, Scalar dt,
+                                      Scalar tolerance, Visit&& visit) noexcept {
+    if (!limits_) return;
+    actuated_problem(J, q, dt);
+    const Jacobian& ja = coupled_ ? ja_ : J;
+    using Gram = Eigen::Matrix<Scalar, Dim, Dim>;
+    const Scalar rank_tol =
+        std::max(Scalar(1e-6), Scalar(100) * Eigen::NumTraits<Scalar>::epsilon());
+    for (int j = 0; j < static_cast<int>(q.size()); ++j) {
+      if (leader_(j) >= 0) continue;  // a follower moves with its leader
+      const bool up = hi_(j) * dt <= tolerance, down = lo_(j) * dt >= -tolerance;
+      if (!up && !down) continue;
+      Gram m = Gram::Zero();  // J_o J_o^T over the other actuated columns
+      for (int k = 0; k < static_cast<int>(q.size()); ++k)
+        if (k != j) m.noalias() += ja.col(k) * ja.col(k).transpose();
+      Eigen::SelfAdjointEigenSolver<Gram> eig;
+      eig.computeDirect(m);
+      const Scalar scale = std::max(eig.eigenvalues()(Dim - 1), ja.col(j).squaredNorm());
+      if (!(eig.eigenvalues()(0) <= rank_tol * scale)) continue;  // the others reach it all
+      const Vec a = eig.eigenvectors().col(0);  // a^T J_o = 0, so a^T x = s theta_dot_j
+      const Scalar s = a.dot(ja.col(j));
+      if (!(std::abs(s) > std::sqrt(rank_tol) * ja.col(j).norm())) continue;
+      if (up) visit(Vec(s > Scalar(0) ? a : Vec(-a)));
+      if (down) visit(Vec(s > Scalar(0) ? Vec(-a) : a));
+    }
   }
 
  private:

@@ -1,0 +1,83 @@
+// The hand's workspace as a constraint on the object twist (docs/method.md section 4).
+//
+// A joint the IK holds at its position limit (less ik.joint_limit_margin) keeps its
+// finger's contact from moving one way whenever the finger's other actuated joints cannot
+// make that motion instead: always for a finger with as many joints as the space has
+// dimensions, and for a redundant finger whose other columns lose rank. The contact
+// velocities x out of reach are then b^T x > 0, b the unit left null vector of the other
+// columns, signed so that b^T x > 0 needs the held joint past its bound
+// (FingerServo::for_each_unreachable_direction). Along the contact normal n that motion
+// cannot be made up by rolling or sliding: a contact asked to follow the object's surface
+// along n and held back opens, or is pressed harder, while the other fingers carry the
+// object on; the grasp deforms until a contact is lost. The part of b along n,
+// b_n = (b . n) n, is the constraint.
+//
+// The contact point p moves with x = v_o + omega_o x (p - p_o) for the object twist
+// V = (v_o; omega_o) [m/s; rad/s, world frame, about the measured object position p_o]
+// (eq. 2), linear in V: b_n^T x = c^T V with c_k = b_n^T x(e_k) over the basis twists e_k.
+// c^T V > 0 asks for what the held joint cannot give: ControllerWarning::workspace_limited
+// is raised. With Config::keep_twist_in_reach the twist is also projected onto
+// c^T V = 0 (the least change of V in the Euclidean norm of (v_o; omega_o); a twist with
+// c^T V <= 0, away from the limit, is left alone; several constraints in turn, two
+// sweeps), so the object stops at the edge of the hand's workspace: the pose error then
+// grows, the pose loop's integral up to its bound (pose_integral_limited). Fingers that
+// do not touch are not considered. Cost when no joint is within kHeldJointTolerance of a
+// held bound: a few comparisons per joint; else forward kinematics, the contact Jacobian
+// and a Dim x Dim symmetric eigenproblem per held joint.
+//
+// noexcept, no allocation (fixed or bounded DOF).
+#pragma once
+
+#include <cstddef>
+
+#include "inhand/controller/finger_motion.hpp"
+#include "inhand/kinematics/contact_kinematics.hpp"
+
+namespace inhand::detail {
+
+/// Within this distance [rad] of the bound the IK holds a joint at, the joint counts as
+/// held: a joint that reaches its bound through an actuator lag gets there asymptotically.
+template <typename Scalar>
+constexpr Scalar kHeldJointTolerance = Scalar(1e-4);
+
+/// The file comment, for every touching finger of `tick` (its config, input, gated
+/// object pose, dt); `scratch` holds each finger's FingerServo, and a finger's
+/// state.fingers[i].jacobian is written with its contact Jacobian (what layer 3 writes
+/// there later in the tick: call after the force layer, which reads last tick's).
+/// Returns true when the twist asked for motion a held joint cannot give (cut when
+/// tick.config.keep_twist_in_reach).
+template <typename Types, typename Tick, typename State, typename Scratch>
+bool keep_twist_in_reach(const Tick& tick, State& state, Scratch& scratch,
+                         typename Types::TwistT& twist) noexcept {
+  using Scalar = typename Types::ScalarType;
+  using Vec = typename Types::Vec;
+  using TwistT = typename Types::TwistT;
+  constexpr Scalar tol = kHeldJointTolerance<Scalar>;
+  const bool cut = tick.config.keep_twist_in_reach;
+  bool asked = false;
+  for (int sweep = 0; sweep < (cut ? 2 : 1); ++sweep) {
+    for (std::size_t i = 0; i < tick.in.fingers.size(); ++i) {
+      const typename Types::FingerInput& f = tick.in.fingers[i];
+      auto& servo = scratch.fingers[i].layer3;
+      if (!f.contact.touching || !servo.at_position_limit(f.joint_positions, tol)) continue;
+      const FingerPoints<Types> points(tick.config.fingers[i], f, scratch.fingers[i].kinematics);
+      typename Types::Jacobian& J = state.fingers[i].jacobian;
+      points.jacobian(f.contact.contact_point, J);
+      const Vec n = f.contact.normal.normalized();
+      servo.for_each_unreachable_direction(J, f.joint_positions, tick.dt, tol, [&](const Vec& b) {
+        const Vec bn = b.dot(n) * n;
+        TwistT c;
+        for (int k = 0; k < c.size(); ++k)
+          c(k) = bn.dot(contact_point_velocity<Scalar, Types::kDim>(
+              TwistT::Unit(c.size(), k), f.contact.contact_point, tick.object.position));
+        const Scalar along = c.dot(twist), cc = c.squaredNorm();
+        if (!(along > Scalar(0) && cc > Scalar(0))) return;
+        asked = true;
+        if (cut) twist -= (along / cc) * c;
+      });
+    }
+  }
+  return asked;
+}
+
+}  // namespace inhand::detail
