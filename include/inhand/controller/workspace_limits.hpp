@@ -71,7 +71,8 @@ bool keep_twist_in_reach(const Tick& tick, State& state, Scratch& scratch,
           c(k) = bn.dot(contact_point_velocity<Scalar, Types::kDim>(
               TwistT::Unit(c.size(), k), f.contact.contact_point, tick.object.position));
         const Scalar along = c.dot(twist), cc = c.squaredNorm();
-        if (!(along > Scalar(0) && cc > Scalar(0))) return;
+        // A contact point so far out that c overflows gives no usable constraint.
+        if (!(along > Scalar(0) && cc > Scalar(0) && is_finite(cc) && is_finite(along))) return;
         asked = true;
         if (cut) twist -= (along / cc) * c;
       });
