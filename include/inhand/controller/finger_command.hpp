@@ -144,14 +144,14 @@ class FingerServo {
     return w;
   }
 
-  /// Whether some actuated joint is within `tolerance` [rad] of the bound the IK holds it
-  /// at (its position limit less ik.joint_limit_margin), or past it; false when joint
-  /// limits are off. q [rad]. No kinematics: a few comparisons per joint.
+  /// Whether some joint is within `tolerance` [rad] of the bound the IK holds it at (its
+  /// position limit less ik.joint_limit_margin), or past it; false when joint limits are
+  /// off. Followers count too: their bounds fold into their leaders'. q [rad]. No
+  /// kinematics: two comparisons per joint.
   bool at_position_limit(const JointVector& q, Scalar tolerance) const noexcept {
     if (!limits_) return false;
     for (int i = 0; i < static_cast<int>(q.size()); ++i)
-      if (leader_(i) < 0 &&
-          (q(i) >= upper_(i) - margin_ - tolerance || q(i) <= lower_(i) + margin_ + tolerance))
+      if (q(i) >= upper_(i) - margin_ - tolerance || q(i) <= lower_(i) + margin_ + tolerance)
         return true;
     return false;
   }
