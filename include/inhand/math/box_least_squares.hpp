@@ -22,12 +22,13 @@
 // size. noexcept.
 #pragma once
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
+#include "inhand/math/jacobi_eigen.hpp"
 #include "inhand/math/types.hpp"
 
 namespace inhand {
@@ -137,16 +138,17 @@ class BoxLeastSquares {
     if constexpr (M == 1) {
       y(0) = g(0, 0) > Scalar(0) ? r(0) / g(0, 0) : Scalar(0);
     } else {
-      // The iterative (QR) solver: its eigenvalues are accurate to ~eps |G| absolutely,
-      // so the null directions of a free set that cannot span the task fall below the
-      // cut; the closed form is not accurate enough for that.
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, M, M>> eig(g);
-      const Rhs mu = eig.eigenvalues();
+      // Jacobi rotations (math/jacobi_eigen.hpp): their eigenvalues are accurate to
+      // ~eps |G| absolutely, so the null directions of a free set that cannot span the
+      // task fall below the cut; the closed form is not accurate enough for that.
+      detail::SymmetricEigen<Scalar, M> eig;
+      eig.compute(g);
+      const Rhs mu = eig.values;
       const Scalar cut =
           Scalar(64) * Eigen::NumTraits<Scalar>::epsilon() * mu.cwiseAbs().maxCoeff();
-      Rhs w = eig.eigenvectors().transpose() * r;
+      Rhs w = eig.vectors.transpose() * r;
       for (int k = 0; k < M; ++k) w(k) = mu(k) > cut ? w(k) / mu(k) : Scalar(0);
-      y.noalias() = eig.eigenvectors() * w;
+      y.noalias() = eig.vectors * w;
     }
     for (int i = 0; i < n; ++i) candidate_(i) = state_(i) == kFree ? J.col(i).dot(y) : z(i);
   }

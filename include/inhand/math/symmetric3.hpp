@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 
+#include "inhand/math/jacobi_eigen.hpp"
 #include "inhand/math/types.hpp"
 
 namespace inhand {
@@ -58,8 +59,8 @@ bool shifted_inverse_trace_3x3(const Eigen::Matrix<Scalar, 3, 3>& G, Scalar x,
 /// error is small next to the gap to the second eigenvalue whenever that gap is not
 /// tiny, and then one step reaches eps |G|. When the start is not below mu_min
 /// (the closed form was further off than the margin allows) or the iteration does
-/// not settle within four steps (clustered smallest eigenvalues), Eigen's iterative
-/// (QR) solver decides. Fixed 3 x 3 storage: no allocation on any path.
+/// not settle within four steps (clustered smallest eigenvalues), the Jacobi rotations of
+/// math/jacobi_eigen.hpp decide. Fixed 3 x 3 storage: no allocation on any path.
 template <typename Scalar>
 Scalar smallest_eigenvalue_3x3(const Eigen::Matrix<Scalar, 3, 3>& G) noexcept {
   const Scalar tr = G.trace();
@@ -92,9 +93,9 @@ Scalar smallest_eigenvalue_3x3(const Eigen::Matrix<Scalar, 3, 3>& G) noexcept {
         return x > Scalar(0) ? x : Scalar(0);
     }
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 3, 3>> qr;
-  qr.compute(G, Eigen::EigenvaluesOnly);
-  return qr.eigenvalues()(0);
+  SymmetricEigen<Scalar, 3> jacobi;
+  jacobi.compute(G);
+  return jacobi.values(0);
 }
 
 }  // namespace detail
