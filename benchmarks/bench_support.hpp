@@ -19,7 +19,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -36,6 +36,7 @@
 
 #include "alloc_counter.hpp"
 #include "inhand/inhand.hpp"
+#include "inhand/math/jacobi_eigen.hpp"
 #include "inhand/sim/presets.hpp"
 #include "inhand/sim/presets_coupled.hpp"
 
@@ -314,8 +315,9 @@ double contact_sigma_min(const RefChain<Dim>& chain, const Eigen::VectorXd& q, c
                  half = std::hypot(0.5 * (G(0, 0) - G(1, 1)), G(0, 1));
     return std::sqrt(std::max(0.0, G.determinant() / (mean + half)));
   } else {
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, Dim, Dim>> eig(G, Eigen::EigenvaluesOnly);
-    return std::sqrt(std::max(0.0, eig.eigenvalues()(0)));
+    inhand::detail::SymmetricEigen<double, Dim> eig;  // math/jacobi_eigen.hpp
+    eig.compute(G);
+    return std::sqrt(std::max(0.0, eig.values(0)));
   }
 }
 
