@@ -27,10 +27,11 @@ fuzz_compilers() {
 }
 
 fuzz_build() {
-  local dir=$1 compilers cc cxx
+  local dir=$1 compilers cc cxx gen
   compilers=$(fuzz_compilers) || return 1
   read -r cc cxx <<<"$compilers"
-  CC=$cc CXX=$cxx cmake -S "$root" -B "$dir" \
+  mapfile -t gen < <(inhand_generator_args "$dir")
+  CC=$cc CXX=$cxx cmake "${gen[@]}" -S "$root" -B "$dir" \
     -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_COMPILE_WARNING_AS_ERROR=ON \
     -DINHAND_BUILD_FUZZERS=ON \

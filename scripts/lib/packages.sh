@@ -12,6 +12,7 @@ INHAND_PACKAGES=(
   cmake
   g++
   make
+  ninja-build
   pkg-config
   # the library
   libeigen3-dev
@@ -39,6 +40,20 @@ INHAND_PACKAGES=(
   clang-14
   libclang-rt-14-dev
 )
+
+# The CMake generator arguments for build directory DIR, one per line: "-G Ninja" for a new
+# directory when ninja is installed and CMAKE_GENERATOR does not name another; nothing for
+# a directory already configured (CMake refuses to change its generator) or without ninja
+# (CMake's default, Makefiles). Ninja's single build graph compiles a target's files while
+# the libraries it links are still being built; the Makefiles build target after target,
+# so every test file waited for the shared test instances (docs/building.md).
+# Use: mapfile -t gen < <(inhand_generator_args "$dir"); cmake "${gen[@]}" -S ...
+inhand_generator_args() {
+  local dir=$1
+  if [[ -z ${CMAKE_GENERATOR:-} && ! -f $dir/CMakeCache.txt ]] && command -v ninja >/dev/null 2>&1; then
+    printf '%s\n' -G Ninja
+  fi
+}
 
 # Prints the packages of INHAND_PACKAGES that are not installed, one per line.
 inhand_missing_packages() {
