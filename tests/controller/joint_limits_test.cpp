@@ -606,4 +606,83 @@ TEST(WorkspaceLimits, ARedundantFingerReachesAroundAHeldJoint) {
   EXPECT_GT(free, 0);
 }
 
+/// Two joints of a 4-joint finger at their bounds leave two free columns, which span a
+/// plane: with the contact normal given, the held joints are taken together
+/// (FingerServo::held_together). Whatever that adds separates s n from every reachable
+/// contact velocity, and the IK, asked for a velocity along s n, misses it by at least
+/// what that separation says; where nothing is added, the IK meets it.
+TEST(WorkspaceLimits, TwoHeldJointsOfARedundantFingerAreTakenTogether) {
+  const Chain4 chain = inhand_test::make_finger<Chain4>(4);
+  inhand::IkParams<double> ikp;
+  inhand::ServoGains<double> gains;
+  auto rng = make_rng(59);
+  const double inf = std::numeric_limits<double>::infinity();
+  int added = 0, met = 0;
+  for (int k = 0; k < scaled(300); ++k) {
+    Servo4 servo;
+    Servo4::Memory memory;
+    servo.configure(chain, ikp);
+    memory.configure(4, gains);
+    Eigen::Vector4d q;
+    for (int i = 0; i < 4; ++i)
+      q(i) = chain.joints[i].lower +
+             uniform(rng, 0.2, 0.8) * (chain.joints[i].upper - chain.joints[i].lower);
+    const int j1 = static_cast<int>(uniform(rng, 0.0, 3.999));
+    const int j2 = (j1 + 1 + static_cast<int>(uniform(rng, 0.0, 2.999))) % 4;
+    double allowed[4] = {0, 0, 0, 0};  // the sign a held joint may still move with
+    for (const int j : {j1, j2}) {
+      const bool up = uniform(rng, 0.0, 1.0) < 0.5;
+      q(j) = up ? chain.joints[j].upper - ikp.joint_limit_margin
+                : chain.joints[j].lower + ikp.joint_limit_margin;
+      allowed[j] = up ? -1.0 : 1.0;
+    }
+    Eigen::Vector3d n(uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0));
+    n.normalize();
+    Eigen::Matrix<double, 3, 4> J;
+    const std::vector<Eigen::Vector3d> alone = unreachable(servo, chain, q, J);
+    std::vector<Eigen::Vector3d> together;
+    servo.for_each_unreachable_direction(
+        J, q, 1e-3, 1e-4, [&](const Eigen::Vector3d& b) { together.push_back(b); }, &n);
+    // The one-joint tests come first, unchanged.
+    ASSERT_GE(together.size(), alone.size()) << "case " << k;
+    for (std::size_t i = 0; i < alone.size(); ++i) EXPECT_EQ(together[i], alone[i]) << k;
+    bool reported[2] = {false, false};
+    for (std::size_t i = alone.size(); i < together.size(); ++i) {
+      const Eigen::Vector3d& b = together[i];
+      EXPECT_NEAR(b.norm(), 1.0, 1e-12);
+      for (int c = 0; c < 4; ++c) {
+        if (allowed[c] == 0.0)  // free: b is normal to its column (the rank tolerance)
+          EXPECT_LT(std::abs(b.dot(J.col(c))), 1.01e-3 * J.norm()) << "case " << k;
+        else  // held: its allowed motion does not move the contact along b
+          EXPECT_LT(allowed[c] * b.dot(J.col(c)), 1.01e-3 * J.norm()) << "case " << k;
+      }
+      const double along = b.dot(n);
+      ASSERT_GT(std::abs(along), 1e-3) << "case " << k;
+      reported[along > 0 ? 0 : 1] = true;
+    }
+    if (together.size() > alone.size()) ++added;
+    for (int side = 0; side < 2; ++side) {
+      FingerOut fo;
+      memory.configure(4, gains);
+      const Eigen::Vector3d v = (side == 0 ? 0.01 : -0.01) * n;
+      servo.command(memory, J, q, v, Eigen::Vector3d::UnitY(), nullptr, inf, 1e-3, fo);
+      const Eigen::Vector3d x = fo.servo.total;
+      if (reported[side]) {
+        // |x - x'| >= b^T (x - x') >= b^T x for every reachable x' (b^T x' <= 0).
+        double bound = 0.0;
+        for (std::size_t i = alone.size(); i < together.size(); ++i)
+          bound = std::max(bound, together[i].dot(x));
+        EXPECT_GE(fo.ik.task_error, 0.999 * bound - 1e-15) << "case " << k;
+        EXPECT_TRUE(inhand::has(fo.ik.status, IkStatus::position_limited)) << "case " << k;
+      } else if (fo.ik.status == IkStatus::ok || fo.ik.status == IkStatus::position_limited) {
+        ++met;  // within the rank tolerance of the cone, and neither damped nor scaled
+        EXPECT_LT(fo.ik.task_error, 1.01e-3 * x.norm() + 1e-12) << "case " << k;
+      }
+    }
+  }
+  EXPECT_GT(added, scaled(300) / 20);
+  EXPECT_GT(met, scaled(300) / 4);
+  inhand_test::record("cases_with_a_direction_added", added);
+}
+
 }  // namespace

@@ -29,6 +29,7 @@
 #include "inhand/controller/controller_status.hpp"
 #include "inhand/controller/ik.hpp"
 #include "inhand/controller/servo.hpp"
+#include "inhand/math/cone_residual.hpp"
 
 namespace inhand {
 
@@ -162,9 +163,17 @@ class FingerServo {
   /// visit(b) with the unit vector b (world frame) such that a contact velocity x with
   /// b^T x > 0 needs that joint past its bound. J (Dim x DOF) is the Jacobian of the
   /// contact point, q the joint positions [rad], dt [s] the tick.
+  /// With `normal` (unit, world frame) and two or more actuated joints held, the held
+  /// joints are also taken together: for s = +1 and -1, when no joint velocity inside the
+  /// bounds (the free joints either way, each held joint only away from its bound) moves
+  /// the contact along s n, visit(b) with b = r / |r|, r the residual of s n from that
+  /// cone (math/cone_residual.hpp): b^T x <= 0 for every reachable x and b . (s n) > 0.
+  /// This finds what a redundant finger loses with several joints at their limits, which
+  /// the one-joint-at-a-time test above misses.
   template <typename Visit>
   void for_each_unreachable_direction(const Jacobian& J, const JointVector& q, Scalar dt,
-                                      Scalar tolerance, Visit&& visit) noexcept {
+                                      Scalar tolerance, Visit&& visit,
+                                      const Vec* normal = nullptr) noexcept {
     if (!limits_) return;
     actuated_problem(J, q, dt);
     const Jacobian& ja = coupled_ ? ja_ : J;
@@ -188,9 +197,58 @@ class FingerServo {
       if (up) visit(Vec(s > Scalar(0) ? a : Vec(-a)));
       if (down) visit(Vec(s > Scalar(0) ? Vec(-a) : a));
     }
+    if (normal != nullptr)
+      held_together(ja, static_cast<int>(q.size()), dt, tolerance, rank_tol, *normal, visit);
   }
 
  private:
+  /// The held joints together (for_each_unreachable_direction with a normal): P projects
+  /// onto the left null space of the free actuated columns, each held joint gives the ray
+  /// P (+-ja_h) of its allowed sign (none when held both ways), and s n is out of reach
+  /// when P (s n) is outside their cone.
+  template <typename Visit>
+  void held_together(const Jacobian& ja, int n, Scalar dt, Scalar tolerance, Scalar rank_tol,
+                     const Vec& normal, Visit& visit) const noexcept {
+    using Gram = Eigen::Matrix<Scalar, Dim, Dim>;
+    const auto held = [&](int j, bool& up, bool& down) {
+      up = hi_(j) * dt <= tolerance;
+      down = lo_(j) * dt >= -tolerance;
+      return leader_(j) < 0 && (up || down);
+    };
+    int count = 0;
+    Scalar scale = Scalar(0);
+    Gram m = Gram::Zero();  // over the free actuated columns (followers' are zero)
+    for (int k = 0; k < n; ++k) {
+      bool up = false, down = false;
+      if (held(k, up, down)) {
+        ++count;
+        scale = std::max(scale, ja.col(k).squaredNorm());
+      } else {
+        m.noalias() += ja.col(k) * ja.col(k).transpose();
+      }
+    }
+    if (count < 2) return;  // one held joint: the test of for_each_unreachable_direction
+    Eigen::SelfAdjointEigenSolver<Gram> eig;
+    eig.computeDirect(m);
+    scale = std::max(scale, eig.eigenvalues()(Dim - 1));
+    Gram P = Gram::Zero();
+    for (int k = 0; k < Dim; ++k)
+      if (eig.eigenvalues()(k) <= rank_tol * scale)
+        P.noalias() += eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose();
+    const auto ray = [&](int j, Vec& g) {
+      bool up = false, down = false;
+      if (!held(j, up, down) || (up && down)) return false;  // free, or not moving at all
+      g.noalias() = P * ja.col(j);
+      if (up) g = -g;
+      return true;
+    };
+    for (const Scalar sign : {Scalar(1), Scalar(-1)}) {
+      const Vec y = P * (sign * normal);
+      Vec r;
+      const Scalar r2 = detail::cone_residual<Scalar, Dim>(y, n, ray, r);
+      if (r2 > rank_tol && is_finite(r2)) visit(Vec(r / std::sqrt(r2)));
+    }
+  }
   /// lo_, hi_ and, for a chain with couplings, ja_ and vmax_: this tick's problem in
   /// actuated coordinates (followers' columns zero and bounds 0, folded into their leaders).
   void actuated_problem(const Jacobian& J, const JointVector& q, Scalar dt) noexcept {

@@ -6,7 +6,12 @@
 // dimensions, and for a redundant finger whose other columns lose rank. The contact
 // velocities x out of reach are then b^T x > 0, b the unit left null vector of the other
 // columns, signed so that b^T x > 0 needs the held joint past its bound
-// (FingerServo::for_each_unreachable_direction). Along the contact normal n that motion
+// (FingerServo::for_each_unreachable_direction). With two or more joints held, they are
+// also taken together: the free joints' columns may span less than the space although
+// each held joint alone is made up by the others (a redundant finger with two joints at
+// their limits); each of +n and -n that no joint velocity inside the bounds gives yields
+// one more such b (the separating direction of the cone those velocities reach, which
+// has b . (+-n) > 0; math/cone_residual.hpp). Along the contact normal n that motion
 // cannot be made up by rolling or sliding: a contact asked to follow the object's surface
 // along n and held back opens, or is pressed harder, while the other fingers carry the
 // object on; the grasp deforms until a contact is lost. The part of b along n,
@@ -23,7 +28,8 @@
 // grows, the pose loop's integral up to its bound (pose_integral_limited). Fingers that
 // do not touch are not considered. Cost when no joint is within kHeldJointTolerance of a
 // held bound: a few comparisons per joint; else forward kinematics, the contact Jacobian
-// and a Dim x Dim symmetric eigenproblem per held joint.
+// and a Dim x Dim symmetric eigenproblem per held joint (one more, and at most
+// C(h, 1) + ... + C(h, Dim) solves of size <= Dim for the cone, with h >= 2 joints held).
 //
 // noexcept, no allocation (fixed or bounded DOF).
 #pragma once
@@ -64,18 +70,21 @@ bool keep_twist_in_reach(const Tick& tick, State& state, Scratch& scratch,
       typename Types::Jacobian& J = state.fingers[i].jacobian;
       points.jacobian(f.contact.contact_point, J);
       const Vec n = f.contact.normal.normalized();
-      servo.for_each_unreachable_direction(J, f.joint_positions, tick.dt, tol, [&](const Vec& b) {
-        const Vec bn = b.dot(n) * n;
-        TwistT c;
-        for (int k = 0; k < c.size(); ++k)
-          c(k) = bn.dot(contact_point_velocity<Scalar, Types::kDim>(
-              TwistT::Unit(c.size(), k), f.contact.contact_point, tick.object.position));
-        const Scalar along = c.dot(twist), cc = c.squaredNorm();
-        // A contact point so far out that c overflows gives no usable constraint.
-        if (!(along > Scalar(0) && cc > Scalar(0) && is_finite(cc) && is_finite(along))) return;
-        asked = true;
-        if (cut) twist -= (along / cc) * c;
-      });
+      servo.for_each_unreachable_direction(
+          J, f.joint_positions, tick.dt, tol,
+          [&](const Vec& b) {
+            const Vec bn = b.dot(n) * n;
+            TwistT c;
+            for (int k = 0; k < c.size(); ++k)
+              c(k) = bn.dot(contact_point_velocity<Scalar, Types::kDim>(
+                  TwistT::Unit(c.size(), k), f.contact.contact_point, tick.object.position));
+            const Scalar along = c.dot(twist), cc = c.squaredNorm();
+            // A contact point so far out that c overflows gives no usable constraint.
+            if (!(along > Scalar(0) && cc > Scalar(0) && is_finite(cc) && is_finite(along))) return;
+            asked = true;
+            if (cut) twist -= (along / cc) * c;
+          },
+          &n);
     }
   }
   return asked;
