@@ -181,9 +181,8 @@ class FingerServo {
     const Scalar rank_tol =
         std::max(Scalar(1e-6), Scalar(100) * Eigen::NumTraits<Scalar>::epsilon());
     for (int j = 0; j < static_cast<int>(q.size()); ++j) {
-      if (leader_(j) >= 0) continue;  // a follower moves with its leader
-      const bool up = hi_(j) * dt <= tolerance, down = lo_(j) * dt >= -tolerance;
-      if (!up && !down) continue;
+      bool up = false, down = false;
+      if (!held(j, dt, tolerance, up, down)) continue;
       Gram m = Gram::Zero();  // J_o J_o^T over the other actuated columns
       for (int k = 0; k < static_cast<int>(q.size()); ++k)
         if (k != j) m.noalias() += ja.col(k) * ja.col(k).transpose();
@@ -202,6 +201,14 @@ class FingerServo {
   }
 
  private:
+  /// Whether actuated joint j is held this tick: within `tolerance` [rad] of the bound the
+  /// IK holds it at, upward (up) or downward (down); false for a follower (it moves with
+  /// its leader). Reads this tick's box (actuated_problem()).
+  bool held(int j, Scalar dt, Scalar tolerance, bool& up, bool& down) const noexcept {
+    up = hi_(j) * dt <= tolerance;
+    down = lo_(j) * dt >= -tolerance;
+    return leader_(j) < 0 && (up || down);
+  }
   /// The held joints together (for_each_unreachable_direction with a normal): P projects
   /// onto the left null space of the free actuated columns, each held joint gives the ray
   /// P (+-ja_h) of its allowed sign (none when held both ways), and s n is out of reach
@@ -210,17 +217,12 @@ class FingerServo {
   void held_together(const Jacobian& ja, int n, Scalar dt, Scalar tolerance, Scalar rank_tol,
                      const Vec& normal, Visit& visit) const noexcept {
     using Gram = Eigen::Matrix<Scalar, Dim, Dim>;
-    const auto held = [&](int j, bool& up, bool& down) {
-      up = hi_(j) * dt <= tolerance;
-      down = lo_(j) * dt >= -tolerance;
-      return leader_(j) < 0 && (up || down);
-    };
     int count = 0;
     Scalar scale = Scalar(0);
     Gram m = Gram::Zero();  // over the free actuated columns (followers' are zero)
     for (int k = 0; k < n; ++k) {
       bool up = false, down = false;
-      if (held(k, up, down)) {
+      if (held(k, dt, tolerance, up, down)) {
         ++count;
         scale = std::max(scale, ja.col(k).squaredNorm());
       } else {
@@ -237,7 +239,7 @@ class FingerServo {
         P.noalias() += eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose();
     const auto ray = [&](int j, Vec& g) {
       bool up = false, down = false;
-      if (!held(j, up, down) || (up && down)) return false;  // free, or not moving at all
+      if (!held(j, dt, tolerance, up, down) || (up && down)) return false;  // or not moving
       g.noalias() = P * ja.col(j);
       if (up) g = -g;
       return true;
