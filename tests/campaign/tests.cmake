@@ -14,6 +14,15 @@ if(INHAND_HAVE_CAMPAIGN)
            COMMAND inhand_campaign --wide --first-seed 988 --count 1 --min-success 1)
   set_tests_properties(campaign.wide_grasp_at_a_joint_limit campaign.wide_grasp_at_a_joint_limit_988
                        PROPERTIES LABELS campaign TIMEOUT 120)
+  # Wide-range cases whose grasp timed out in a force cycle: two fingers of each (behind
+  # 6.7 ms of actuator lag in 743, 9.6 ms in 382) lost their contacts 14-15 times between
+  # 1.5 s and 3 s, each time coming back at approach speed and hitting the sphere with up
+  # to 2.3 N (controller/grasp.hpp: a finger that has touched now comes back at creep speed).
+  foreach(seed 382 743)
+    add_test(NAME campaign.wide_grasp_force_cycle_${seed}
+             COMMAND inhand_campaign --wide --first-seed ${seed} --count 1 --min-success 1)
+    set_tests_properties(campaign.wide_grasp_force_cycle_${seed} PROPERTIES LABELS campaign TIMEOUT 120)
+  endforeach()
   # Wide-range cases whose thumb reaches a joint limit during the task: the other fingers
   # carried the object on and the grasp deformed until a contact opened (481: dropped;
   # 550: dropped). With the twist kept within reach the object stops at the limit and

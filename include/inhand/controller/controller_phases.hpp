@@ -194,9 +194,10 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
       m.settle.start();
       m.state = FingerState::approaching;
       const typename Types::Vec p_v = points.virtual_point(m.target.normal);
-      const bool creep = m.touched && t.config.force_layer.servo_stiffness > Scalar(0);
-      const typename Types::Vec v = approach_velocity(  // creep back: grasp.hpp surface_point
-          g, p_v, creep ? surface_point(p_v, m.target) : m.target.contact_point, m.target.normal);
+      // A finger that has touched comes back at creep speed (grasp.hpp surface_point).
+      const typename Types::Vec v = approach_velocity(
+          g, p_v, m.touched ? surface_point(p_v, m.target) : m.target.contact_point,
+          m.target.normal);
       w |= detail::command_finger(t, i, points, p_v, v, false, st, sc, fo);
       all_placed = false;
     }

@@ -33,9 +33,8 @@ struct ForceLayerParams {
   /// The hand's joint servo, every joint alike (joint_servo.hpp): position stiffness K
   /// [N m/rad] and velocity gain D [N m s/rad] with which it tracks the integral of the
   /// joint-velocity command. 0 (the default): not modelled, a rigid servo. With K > 0 the
-  /// force loop is scheduled on the contact and the servo in series, presses so that the
-  /// two store a force along n (between J J^T n and n, weighted by their compliances), and
-  /// a finger that lost its contact after touching comes back at creep speed.
+  /// force loop is scheduled on the contact and the servo in series, and presses so that
+  /// the two store a force along n (between J J^T n and n, weighted by their compliances).
   Scalar servo_stiffness = Scalar(0);
   Scalar servo_damping = Scalar(0);
 

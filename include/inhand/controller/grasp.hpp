@@ -41,6 +41,13 @@
 // load. Fingers that touched 9 mm below a cylinder's equator and slid to it at full
 // force left 0.8 * 6 N = 4.8 N on a 50 g object, which then rolled out of a stiff
 // (50 kN/m) grasp in 9 ms; sliding at 0.3 q_g leaves 30 % of that.
+// A finger that loses its contact during the grasp after touching comes back at
+// creep_speed (surface_point below), not at approach_speed: the object is held until
+// release, so its surface is where the finger touched it. At approach_speed a finger
+// behind an actuator lag of several milliseconds hit the surface again with several
+// times its force target, its force integral wound up while it backed off, and the contact
+// opened again, a cycle that never let the grasp settle (0.3 N targets cycling between 0
+// and 2.3 N every 105 ms on a 47 kN/m contact with 6.7 ms of lag).
 // During manipulation a finger that loses contact re-approaches along its last
 // measured normal, aiming at its last contact point carried rigidly with the measured
 // object pose, and is reported as `reacquiring` until it touches again.
