@@ -45,9 +45,10 @@
 // creep_speed (surface_point below), not at approach_speed: the object is held until
 // release, so its surface is where the finger touched it. At approach_speed a finger
 // behind an actuator lag of several milliseconds hit the surface again with several
-// times its force target, its force integral wound up while it backed off, and the contact
-// opened again, a cycle that never let the grasp settle (0.3 N targets cycling between 0
-// and 2.3 N every 105 ms on a 47 kN/m contact with 6.7 ms of lag).
+// times its force target; its force integral wound up during that overshoot, so the
+// finger backed off past its target until the contact opened again, a cycle that never let
+// the grasp settle (0.3 N targets cycling between 0 and 2.3 N every 105 ms on a 47 kN/m
+// contact with 6.7 ms of lag).
 // During manipulation a finger that loses contact re-approaches along its last
 // measured normal, aiming at its last contact point carried rigidly with the measured
 // object pose, and is reported as `reacquiring` until it touches again.
