@@ -3,8 +3,10 @@
 // manipulation_phase, controller/controller_phases.hpp), and nearly all of a plant
 // scenario's is ScenarioRunner<HandPlantAdapter>::run (sim/scenario_runner.hpp). This
 // header declares them `extern template` for the controller types below, which at least
-// two test files each instantiate; their one definition is in controller_instances_*.cpp
-// (library inhand_test_instances). The tests' precompiled header includes this header, so
+// two test files each instantiate, and likewise the contact IK's solvers for the chain
+// types that the IK's typed suites, the robustness sweeps and those controllers share;
+// their one definition is in controller_instances_*.cpp and ik_instances_*.cpp (library
+// inhand_test_instances). The tests' precompiled header includes this header, so
 // every test linked with that library uses it; a file that does not include it (for
 // example realtime/no_allocation_test.cpp, compiled with its own Eigen macro) instantiates
 // what it uses itself, as a user's code does. Build plumbing only: nothing here changes
@@ -25,6 +27,30 @@ using Planar3x3 = inhand::ControllerTypes<double, 2, 3, 3, 3>;
 using PlanarDynamic4 = inhand::ControllerTypes<double, 2, inhand::Dynamic, inhand::Dynamic, 4>;
 
 }  // namespace inhand_test::instances
+
+// The contact IK's solvers (ContactIk::solve_impl and pseudo_inverse, defined out of the
+// class for this).
+namespace inhand {
+extern template class ContactIk<double, 2, 2, 2>;
+extern template class ContactIk<double, 2, 3, 3>;
+extern template class ContactIk<double, 2, Dynamic, 4>;
+extern template class ContactIk<double, 2, Dynamic, 5>;
+extern template class ContactIk<double, 3, 2, 2>;
+extern template class ContactIk<double, 3, 3, 3>;
+extern template class ContactIk<double, 3, 4, 4>;
+extern template class ContactIk<double, 3, 5, 5>;
+extern template class ContactIk<double, 3, Dynamic, 5>;
+extern template class ContactIk<double, 3, Dynamic, 6>;
+extern template class ContactIk<double, 3, Dynamic, Dynamic>;
+extern template class ContactIk<float, 2, 2, 2>;
+extern template class ContactIk<float, 2, 3, 3>;
+extern template class ContactIk<float, 3, 2, 2>;
+extern template class ContactIk<float, 3, 3, 3>;
+extern template class ContactIk<float, 3, 4, 4>;
+extern template class ContactIk<float, 3, 5, 5>;
+extern template class ContactIk<float, 3, Dynamic, 5>;
+extern template class ContactIk<float, 3, Dynamic, Dynamic>;
+}  // namespace inhand
 
 // INHAND_TEST_PHASES(prefix, T): the explicit instantiation of both phase functions for
 // ControllerTypes T, declared (prefix `extern`) or defined (empty prefix), in namespace

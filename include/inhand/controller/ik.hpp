@@ -147,26 +147,7 @@ class ContactIk {
   }
 
   /// The (damped, per the schedule) pseudo-inverse J^+ that solve() applies.
-  IkReport<Scalar> pseudo_inverse(const Jacobian& J, PseudoInverse& out) noexcept {
-    IkReport<Scalar> report;
-    const auto f = dls_.factorize(J, params_.damping, params_.exact_min_singular_value);
-    if (!f.valid) {
-      out.setZero();
-      report.status = IkStatus::invalid_input;
-      return report;
-    }
-    report.min_singular_value = f.min_singular_value;
-    report.min_singular_value_exact = f.min_singular_value_exact;
-    report.damping = f.damping;
-    if (f.damped) report.status = IkStatus::damped;
-    dls_.pseudo_inverse(J, out);
-    if (!all_finite(out)) {  // finite but enormous J: the Gram matrix overflowed
-      out.setZero();
-      report = IkReport<Scalar>{};
-      report.status = IkStatus::invalid_input;
-    }
-    return report;
-  }
+  IkReport<Scalar> pseudo_inverse(const Jacobian& J, PseudoInverse& out) noexcept;
 
   /// Upper bound of |theta_dot| / |x_dot| before velocity limiting (no null-space term).
   Scalar gain_bound() const noexcept { return params_.damping.gain_bound(); }
@@ -175,73 +156,21 @@ class ContactIk {
   IkReport<Scalar> solve_impl(const Jacobian& J, const CartesianVector& x_dot,
                               const JointVector& max_velocity, const JointVector* z,
                               JointVector& theta_dot, const JointVector* lo, const JointVector* hi,
-                              const CartesianVector* normal = nullptr) noexcept {
-    IkReport<Scalar> report;
-    const bool boxed = lo != nullptr && hi != nullptr;
-    // J is checked by the factorisation below (a non-finite J makes it invalid).
-    if (!all_finite(x_dot) || (z != nullptr && !all_finite(*z)) ||
-        !limits_valid(max_velocity, lo, hi, static_cast<int>(J.cols()))) {
-      theta_dot.setZero();
-      report.status = IkStatus::invalid_input;
-      return report;
-    }
+                              const CartesianVector* normal = nullptr) noexcept;
+
+  /// Factorises J by the damping schedule and copies the factorisation's figures into
+  /// `report`; false, with `report.status` invalid_input, if it is not valid (J not finite).
+  bool factorize(const Jacobian& J, IkReport<Scalar>& report) noexcept {
     const auto f = dls_.factorize(J, params_.damping, params_.exact_min_singular_value);
     if (!f.valid) {
-      theta_dot.setZero();
       report.status = IkStatus::invalid_input;
-      return report;
+      return false;
     }
     report.min_singular_value = f.min_singular_value;
     report.min_singular_value_exact = f.min_singular_value_exact;
     report.damping = f.damping;
     if (f.damped) report.status = report.status | IkStatus::damped;
-    dls_.solve(J, x_dot, theta_dot);
-    if (z != nullptr && dls_.cols() > Dim) {
-      dls_.pseudo_inverse(J, pinv_);
-      // theta_dot += (I - J^+ J) z, evaluated as z - J^+ (J z): no n x n temporary.
-      ns_.noalias() = pinv_ * (J * (*z));
-      theta_dot += *z - ns_;
-    }
-    if (!all_finite(theta_dot)) {  // finite but enormous J, x_dot or z: overflow
-      theta_dot.setZero();
-      report = IkReport<Scalar>{};
-      report.status = IkStatus::invalid_input;
-      return report;
-    }
-    if (boxed &&
-        !((theta_dot.array() >= lo->array()).all() && (theta_dot.array() <= hi->array()).all())) {
-      const Scalar l2 = report.damping * report.damping;
-      const Scalar length = normal != nullptr ? normal->norm() : Scalar(0);
-      const Scalar extra = params_.limited_normal_weight - Scalar(1);  // w - 1
-      BoxLeastSquaresResult<Scalar> held;
-      if (extra > Scalar(0) && length > Scalar(0) && is_finite(length)) {
-        // W J and W x_dot with W = I + (w - 1) n n^T, n the unit normal.
-        const CartesianVector n = *normal / length;
-        weighted_.noalias() = J + (extra * n) * (n.transpose() * J);
-        const CartesianVector b = x_dot + (extra * n.dot(x_dot)) * n;
-        held = box_.solve(weighted_, b, l2, *lo, *hi, theta_dot);
-      } else {
-        held = box_.solve(J, x_dot, l2, *lo, *hi, theta_dot);
-      }
-      report.held_joints = held.held;
-      if (held.held != 0) report.status = report.status | IkStatus::position_limited;
-    }
-    Scalar s = Scalar(1);
-    for (int i = 0; i < theta_dot.size(); ++i) {
-      const Scalar a = std::abs(theta_dot(i));
-      if (a > max_velocity(i)) s = std::min(s, max_velocity(i) / a);
-    }
-    if (s < Scalar(1)) {
-      theta_dot *= s;
-      // s = limit / |theta_i| is rounded, so the product can exceed the limit by an
-      // ulp; clamp that rounding away so the limits hold exactly.
-      for (int i = 0; i < theta_dot.size(); ++i)
-        theta_dot(i) = std::min(std::max(theta_dot(i), -max_velocity(i)), max_velocity(i));
-      report.status = report.status | IkStatus::limited;
-    }
-    report.limit_scale = s;
-    report.task_error = (columns_times(J, theta_dot) - x_dot).norm();
-    return report;
+    return true;
   }
 
   /// Velocity limits > 0 (NaN fails), and a box [lo, hi] (if given) of this solver's size,
@@ -268,5 +197,93 @@ class ContactIk {
   PseudoInverse pinv_;
   Jacobian weighted_;  ///< W J of the normal-priority re-solve
 };
+
+// The two solvers are defined out of the class (not inline) so that a program compiling
+// the same ContactIk type in several files can declare it `extern template` and compile
+// it once (the tests do: tests/common/controller_instances.hpp).
+
+template <typename Scalar, int Dim, int Dof, int MaxDof>
+IkReport<Scalar> ContactIk<Scalar, Dim, Dof, MaxDof>::pseudo_inverse(const Jacobian& J,
+                                                                     PseudoInverse& out) noexcept {
+  IkReport<Scalar> report;
+  if (!factorize(J, report)) {
+    out.setZero();
+    return report;
+  }
+  dls_.pseudo_inverse(J, out);
+  if (!all_finite(out)) {  // finite but enormous J: the Gram matrix overflowed
+    out.setZero();
+    report = IkReport<Scalar>{};
+    report.status = IkStatus::invalid_input;
+  }
+  return report;
+}
+
+template <typename Scalar, int Dim, int Dof, int MaxDof>
+IkReport<Scalar> ContactIk<Scalar, Dim, Dof, MaxDof>::solve_impl(
+    const Jacobian& J, const CartesianVector& x_dot, const JointVector& max_velocity,
+    const JointVector* z, JointVector& theta_dot, const JointVector* lo, const JointVector* hi,
+    const CartesianVector* normal) noexcept {
+  IkReport<Scalar> report;
+  const bool boxed = lo != nullptr && hi != nullptr;
+  // J is checked by the factorisation below (a non-finite J makes it invalid).
+  if (!all_finite(x_dot) || (z != nullptr && !all_finite(*z)) ||
+      !limits_valid(max_velocity, lo, hi, static_cast<int>(J.cols()))) {
+    theta_dot.setZero();
+    report.status = IkStatus::invalid_input;
+    return report;
+  }
+  if (!factorize(J, report)) {
+    theta_dot.setZero();
+    return report;
+  }
+  dls_.solve(J, x_dot, theta_dot);
+  if (z != nullptr && dls_.cols() > Dim) {
+    dls_.pseudo_inverse(J, pinv_);
+    // theta_dot += (I - J^+ J) z, evaluated as z - J^+ (J z): no n x n temporary.
+    ns_.noalias() = pinv_ * (J * (*z));
+    theta_dot += *z - ns_;
+  }
+  if (!all_finite(theta_dot)) {  // finite but enormous J, x_dot or z: overflow
+    theta_dot.setZero();
+    report = IkReport<Scalar>{};
+    report.status = IkStatus::invalid_input;
+    return report;
+  }
+  if (boxed &&
+      !((theta_dot.array() >= lo->array()).all() && (theta_dot.array() <= hi->array()).all())) {
+    const Scalar l2 = report.damping * report.damping;
+    const Scalar length = normal != nullptr ? normal->norm() : Scalar(0);
+    const Scalar extra = params_.limited_normal_weight - Scalar(1);  // w - 1
+    BoxLeastSquaresResult<Scalar> held;
+    if (extra > Scalar(0) && length > Scalar(0) && is_finite(length)) {
+      // W J and W x_dot with W = I + (w - 1) n n^T, n the unit normal.
+      const CartesianVector n = *normal / length;
+      weighted_.noalias() = J + (extra * n) * (n.transpose() * J);
+      const CartesianVector b = x_dot + (extra * n.dot(x_dot)) * n;
+      held = box_.solve(weighted_, b, l2, *lo, *hi, theta_dot);
+    } else {
+      held = box_.solve(J, x_dot, l2, *lo, *hi, theta_dot);
+    }
+    report.held_joints = held.held;
+    if (held.held != 0) report.status = report.status | IkStatus::position_limited;
+  }
+  Scalar s = Scalar(1);
+  for (int i = 0; i < theta_dot.size(); ++i) {
+    const Scalar a = std::abs(theta_dot(i));
+    if (a > max_velocity(i)) s = std::min(s, max_velocity(i) / a);
+  }
+  if (s < Scalar(1)) {
+    theta_dot *= s;
+    // s = limit / |theta_i| is rounded, so the product can exceed the limit by an
+    // ulp; clamp that rounding away so the limits hold exactly.
+    for (int i = 0; i < theta_dot.size(); ++i)
+      theta_dot(i) = std::min(std::max(theta_dot(i), -max_velocity(i)), max_velocity(i));
+    report.status = report.status | IkStatus::limited;
+  }
+  report.limit_scale = s;
+  report.task_error = (columns_times(J, theta_dot) - x_dot).norm();
+  return report;
+}
 
 }  // namespace inhand
