@@ -34,4 +34,16 @@ if(INHAND_HAVE_CAMPAIGN)
     set_tests_properties(campaign.wide_thumb_at_a_limit_kept_in_reach_${seed}
                          PROPERTIES LABELS campaign TIMEOUT 120)
   endforeach()
+  # The same edge without the option: the twist is kept within reach on the ticks where
+  # the force layer reports the grasp at risk (beyond_capacity or slipping;
+  # controller_phases.hpp). Default-range seed 1620 (a 100 g sphere; the thumb at its
+  # limit from 3.2 s, slipping and beyond capacity from 3.7 s) was dropped at 4.23 s;
+  # wide seed 550 was dropped too. Both now end within the campaign's bounds.
+  add_test(NAME campaign.thumb_at_a_limit_grasp_at_risk_1620
+           COMMAND inhand_campaign --first-seed 1620 --count 1 --min-success 1)
+  add_test(NAME campaign.wide_thumb_at_a_limit_grasp_at_risk_550
+           COMMAND inhand_campaign --wide --first-seed 550 --count 1 --min-success 1)
+  set_tests_properties(campaign.thumb_at_a_limit_grasp_at_risk_1620
+                       campaign.wide_thumb_at_a_limit_grasp_at_risk_550
+                       PROPERTIES LABELS campaign TIMEOUT 120)
 endif()

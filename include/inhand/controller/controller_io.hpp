@@ -106,8 +106,10 @@ struct ControllerTypes {
     /// commanded twist asks a touching contact to move, along its normal, where a joint
     /// held at its position limit cannot follow. true: the twist is also cut there, so the
     /// object stops at the edge of the hand's workspace instead of being carried on by the
-    /// other fingers (which deforms the grasp). false (default): the twist is left alone;
-    /// the held finger rolls or slides on the object if it can.
+    /// other fingers (which deforms the grasp). false (default): the twist is cut only on
+    /// a tick whose force layer reports the grasp at risk (ForceLayerStatus
+    /// beyond_capacity or slipping); otherwise it is left alone, and the held finger rolls
+    /// or slides on the object if it can.
     bool keep_twist_in_reach = false;
     /// start_manipulation() refuses a trajectory whose start pose is farther than this
     /// from the measured object pose (m, and rad of the rotation between them); > 0.

@@ -258,9 +258,11 @@ ControllerStatus manipulation_phase(
   if (has(fs, ForceLayerStatus::grip_raised)) w |= ControllerWarning::grip_raised;
   if (has(fs, ForceLayerStatus::beyond_capacity)) w |= ControllerWarning::beyond_capacity;
   if (has(fs, ForceLayerStatus::integral_limited)) w |= ControllerWarning::force_integral_limited;
-  // Layers 2-3 per finger, with the twist kept within reach (workspace_limits.hpp).
+  // Layers 2-3 per finger, the twist kept within reach (workspace_limits.hpp): always with
+  // Config::keep_twist_in_reach, else while the force layer reports the grasp at risk.
   typename Types::TwistT twist = pose.commanded_twist;
-  if (detail::keep_twist_in_reach<Types>(t, st, sc, twist))
+  const bool at_risk = has(fs, ForceLayerStatus::beyond_capacity | ForceLayerStatus::slipping);
+  if (detail::keep_twist_in_reach<Types>(t, st, sc, twist, t.config.keep_twist_in_reach || at_risk))
     w |= ControllerWarning::workspace_limited;
   out.commanded_twist = twist;
   bool lost = false;

@@ -110,6 +110,7 @@ enum class ControllerWarning : unsigned {
   joint_position_limited = 1u << 16,  ///< some joint was held at its position limit (IK)
   /// the object twist asks a touching contact to move, along its normal, where a joint
   /// held at its limit cannot follow (workspace_limits.hpp); cut when keep_twist_in_reach
+  /// or when the force layer reports beyond_capacity or slipping
   workspace_limited = 1u << 17,
 };
 template <>

@@ -21,10 +21,12 @@
 // V = (v_o; omega_o) [m/s; rad/s, world frame, about the measured object position p_o]
 // (eq. 2), linear in V: b_n^T x = c^T V with c_k = b_n^T x(e_k) over the basis twists e_k.
 // c^T V > 0 asks for what the held joint cannot give: ControllerWarning::workspace_limited
-// is raised. With Config::keep_twist_in_reach the twist is also projected onto
-// c^T V = 0 (the least change of V in the Euclidean norm of (v_o; omega_o); a twist with
-// c^T V <= 0, away from the limit, is left alone; several constraints in turn, two
-// sweeps), so the object stops at the edge of the hand's workspace: the pose error then
+// is raised. With Config::keep_twist_in_reach, and without it on a tick whose force layer
+// reports the grasp at risk (beyond_capacity or slipping: the caller's `cut`), the twist
+// is also projected onto c^T V = 0 (the least change of V in the Euclidean norm of
+// (v_o; omega_o); a twist with c^T V <= 0, away from the limit, is left alone; several
+// constraints in turn, two sweeps), so the object stops at the edge of the hand's
+// workspace: the pose error then
 // grows, the pose loop's integral up to its bound (pose_integral_limited). Fingers that
 // do not touch are not considered. Cost when no joint is within kHeldJointTolerance of a
 // held bound: a few comparisons per joint; else forward kinematics, the contact Jacobian
@@ -50,16 +52,15 @@ constexpr Scalar kHeldJointTolerance = Scalar(1e-4);
 /// object pose, dt); `scratch` holds each finger's FingerServo, and a finger's
 /// state.fingers[i].jacobian is written with its contact Jacobian (what layer 3 writes
 /// there later in the tick: call after the force layer, which reads last tick's).
-/// Returns true when the twist asked for motion a held joint cannot give (cut when
-/// tick.config.keep_twist_in_reach).
+/// Returns true when the twist asked for motion a held joint cannot give; with `cut` the
+/// twist is also projected as the file comment says.
 template <typename Types, typename Tick, typename State, typename Scratch>
 bool keep_twist_in_reach(const Tick& tick, State& state, Scratch& scratch,
-                         typename Types::TwistT& twist) noexcept {
+                         typename Types::TwistT& twist, bool cut) noexcept {
   using Scalar = typename Types::ScalarType;
   using Vec = typename Types::Vec;
   using TwistT = typename Types::TwistT;
   constexpr Scalar tol = kHeldJointTolerance<Scalar>;
-  const bool cut = tick.config.keep_twist_in_reach;
   bool asked = false;
   for (int sweep = 0; sweep < (cut ? 2 : 1); ++sweep) {
     for (std::size_t i = 0; i < tick.in.fingers.size(); ++i) {
