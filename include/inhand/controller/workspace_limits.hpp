@@ -87,6 +87,7 @@ bool keep_twist_in_reach(const Tick& tick, State& state, Scratch& scratch,
           },
           &n);
     }
+    if (!asked) break;  // nothing cut: a second sweep would find the same
   }
   return asked;
 }
