@@ -25,9 +25,9 @@
 // reports the grasp at risk (beyond_capacity or slipping: the caller's `cut`), the twist
 // is also projected onto c^T V = 0 (the least change of V in the Euclidean norm of
 // (v_o; omega_o); a twist with c^T V <= 0, away from the limit, is left alone; several
-// constraints in turn, two sweeps), so the object stops at the edge of the hand's
-// workspace: the pose error then
-// grows, the pose loop's integral up to its bound (pose_integral_limited). Fingers that
+// constraints in turn, a second sweep when the first cut something), so the object stops
+// at the edge of the hand's workspace: the pose error then grows, the pose loop's
+// integral up to its bound (pose_integral_limited). Fingers that
 // do not touch are not considered. Cost when no joint is within kHeldJointTolerance of a
 // held bound: a few comparisons per joint; else forward kinematics, the contact Jacobian
 // and a Dim x Dim symmetric eigenproblem per held joint (one more, and at most
