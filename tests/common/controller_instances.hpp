@@ -7,10 +7,9 @@
 // types that the IK's typed suites, the robustness sweeps and those controllers share;
 // their one definition is in controller_instances_*.cpp and ik_instances_*.cpp (library
 // inhand_test_instances). The tests' precompiled header includes this header, so
-// every test linked with that library uses it; a file that does not include it (for
-// example realtime/no_allocation_test.cpp, compiled with its own Eigen macro) instantiates
-// what it uses itself, as a user's code does. Build plumbing only: nothing here changes
-// what the tests check.
+// every test linked with that library uses it (the urdf area's, built without that
+// header, instantiate what they use themselves, as a user's code does). Build plumbing
+// only: nothing here changes what the tests check.
 #pragma once
 
 #include "inhand/inhand.hpp"
@@ -20,6 +19,9 @@ namespace inhand_test::instances {
 
 /// The analytic plant's controller (sim/hand_plant_scenario.hpp: HandController).
 using Hand = inhand::ControllerTypes<double, 3, inhand::Dynamic, inhand::Dynamic, 6>;
+/// Run-time finger count and DOF without a bound.
+using DynamicHand =
+    inhand::ControllerTypes<double, 3, inhand::Dynamic, inhand::Dynamic, inhand::Dynamic>;
 using Spatial3x3 = inhand::ControllerTypes<double, 3, 3, 3, 3>;
 using Spatial3x3Float = inhand::ControllerTypes<float, 3, 3, 3, 3>;
 using Planar2x3 = inhand::ControllerTypes<double, 2, 2, 3, 3>;
@@ -64,6 +66,7 @@ extern template class ContactIk<float, 3, Dynamic, Dynamic>;
 
 namespace inhand {
 INHAND_TEST_PHASES(extern, inhand_test::instances::Hand)
+INHAND_TEST_PHASES(extern, inhand_test::instances::DynamicHand)
 INHAND_TEST_PHASES(extern, inhand_test::instances::Spatial3x3)
 INHAND_TEST_PHASES(extern, inhand_test::instances::Spatial3x3Float)
 INHAND_TEST_PHASES(extern, inhand_test::instances::Planar2x3)
