@@ -199,6 +199,7 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
   c.max_joint_acceleration =
       r.limit("max_joint_acceleration", c.max_joint_acceleration, Range::positive_up_to(1e9));
   c.keep_twist_in_reach = r.boolean("keep_twist_in_reach", c.keep_twist_in_reach);
+  c.at_risk_hold = r.number("at_risk_hold", c.at_risk_hold, Range::non_negative_up_to(10.0));
   {
     ObjectReader f = r.object("pose_feedback");
     PoseFeedback<double>& pf = c.pose_feedback;

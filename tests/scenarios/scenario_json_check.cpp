@@ -164,7 +164,7 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
                   "normal_angle_std": 0.02, "object_position_std": 2e-5, "object_rotation_std": 3e-4,
                   "touch_threshold": 0.05}})");
   j["controller"] = ex::parse_json_text(R"({"control_period": 2e-3, "max_tick": 0.02,
-      "max_joint_acceleration": 300, "keep_twist_in_reach": true,
+      "max_joint_acceleration": 300, "keep_twist_in_reach": true, "at_risk_hold": 0.2,
       "outlier_gates": {"max_object_speed": 0.4, "max_object_angular_speed": 8, "max_force_rate": 200,
                         "max_consecutive_rejections": 3},
       "pose_feedback": {"position_gain": 6, "orientation_gain": 7, "max_linear_speed": 0.04,
@@ -222,6 +222,7 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   EXPECT_EQ(c.max_tick, 0.02);
   EXPECT_EQ(c.max_joint_acceleration, 300);
   EXPECT_TRUE(c.keep_twist_in_reach);
+  EXPECT_EQ(c.at_risk_hold, 0.2);
   EXPECT_EQ(c.outlier_gates.max_object_speed, 0.4);
   EXPECT_EQ(c.outlier_gates.max_object_angular_speed, 8);
   EXPECT_EQ(c.outlier_gates.max_force_rate, 200);
@@ -447,6 +448,7 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
   EXPECT_EQ(c.max_tick, dc.max_tick);
   EXPECT_EQ(c.max_joint_acceleration, dc.max_joint_acceleration);
   EXPECT_EQ(c.keep_twist_in_reach, dc.keep_twist_in_reach);
+  EXPECT_EQ(c.at_risk_hold, dc.at_risk_hold);
   {
     const inhand::ForceLayerParams<double>& fa = c.force_layer;
     const inhand::ForceLayerParams<double>& fb = dc.force_layer;

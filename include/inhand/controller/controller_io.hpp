@@ -111,6 +111,11 @@ struct ControllerTypes {
     /// beyond_capacity or slipping); otherwise it is left alone, and the held finger rolls
     /// or slides on the object if it can.
     bool keep_twist_in_reach = false;
+    /// s the cut made while the grasp is at risk stays on after the last tick at risk
+    /// (>= 0; 0: only on those ticks). The two flags flicker at their thresholds (gaps of
+    /// 1-6 ticks), so without a hold the cut would switch on and off with them; the default
+    /// bridges such gaps and is short against the pose loop's time constant (1/8 s).
+    Scalar at_risk_hold = Scalar(0.05);
     /// start_manipulation() refuses a trajectory whose start pose is farther than this
     /// from the measured object pose (m, and rad of the rotation between them); > 0.
     Scalar start_position_tolerance = Scalar(0.01);
@@ -141,6 +146,8 @@ struct ControllerTypes {
                                    "must be finite, > 0 and >= force_planner.nominal_force");
       if (!(c.contact_tolerance > Scalar(0)) || c.contact_tolerance != c.contact_tolerance)
         return Validation::invalid("contact_tolerance", "must be > 0 (+inf disables)");
+      if (!is_finite(c.at_risk_hold) || !(c.at_risk_hold >= Scalar(0)))
+        return Validation::invalid("at_risk_hold", "must be finite and >= 0");
       if (!is_finite(c.start_position_tolerance) || !(c.start_position_tolerance > Scalar(0)))
         return Validation::invalid("start_position_tolerance", "must be finite and > 0");
       if (!is_finite(c.start_orientation_tolerance) || !(c.start_orientation_tolerance > Scalar(0)))

@@ -1,9 +1,8 @@
 // The two task phases of one controller tick, after the input checks and the sensor
 // gates (reactive_controller.hpp): the grasp phase (object held; grasp.hpp) and the
 // manipulation phase (layers 1-3 of docs/method.md section 7). Each takes this tick's
-// values (configuration, input, gated object pose, dt), updates the controller's state
-// and writes the Output; the force layer's input is assembled in the scratch.
-// Frames, units, signs: controller_io.hpp. noexcept, no allocation.
+// values (configuration, input, gated object pose, dt), updates the controller's state and
+// writes the Output (frames, units, signs: controller_io.hpp). noexcept, no allocation.
 #pragma once
 
 #include <cstddef>
@@ -259,11 +258,12 @@ ControllerStatus manipulation_phase(
   if (has(fs, ForceLayerStatus::beyond_capacity)) w |= ControllerWarning::beyond_capacity;
   if (has(fs, ForceLayerStatus::integral_limited)) w |= ControllerWarning::force_integral_limited;
   // Layers 2-3 per finger, the twist kept within reach (workspace_limits.hpp): always with
-  // Config::keep_twist_in_reach, else while the force layer reports the grasp at risk.
+  // Config::keep_twist_in_reach, else while the grasp is at risk and at_risk_hold after.
   typename Types::TwistT twist = pose.commanded_twist;
-  const bool at_risk = has(fs, ForceLayerStatus::beyond_capacity | ForceLayerStatus::slipping);
-  if (detail::keep_twist_in_reach<Types>(t, st, sc, twist, t.config.keep_twist_in_reach || at_risk))
-    w |= ControllerWarning::workspace_limited;
+  const bool cut = st.hold_risk(fs, t.config.at_risk_hold, t.dt) || t.config.keep_twist_in_reach;
+  if (detail::keep_twist_in_reach<Types>(t, st, sc, twist, cut))
+    w |= cut ? ControllerWarning::workspace_limited | ControllerWarning::workspace_cut
+             : ControllerWarning::workspace_limited;
   out.commanded_twist = twist;
   bool lost = false;
   for (int i = 0; i < n; ++i) {

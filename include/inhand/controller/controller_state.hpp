@@ -62,6 +62,7 @@ struct ControllerState {
   bool has_time = false;
   Scalar settled_time = Scalar(0);       ///< s the grasp criterion has held
   Scalar manipulation_time = Scalar(0);  ///< s since start_manipulation
+  Scalar risk_hold = Scalar(0);          ///< s the at-risk cut stays on (Config::at_risk_hold)
   PoseLoop<Scalar, Dim> pose_loop{};
   PoseGate<Scalar, Dim> pose_gate{};
 
@@ -82,12 +83,26 @@ struct ControllerState {
       planner.set_role(i, fc.role);
     }
   }
+  /// The task loops' memory (the pose loop, the at-risk hold), cleared when a task starts
+  /// from rest.
+  void reset_task_loops() noexcept {
+    pose_loop.reset();
+    risk_hold = Scalar(0);
+  }
+  /// Whether the twist is cut for the grasp at risk (the force layer's status `fs` says
+  /// beyond_capacity or slipping): on a tick at risk, and for `hold` s after the last one
+  /// (ticks of dt s).
+  bool hold_risk(ForceLayerStatus fs, Scalar hold, Scalar dt) noexcept {
+    const bool at_risk = has(fs, ForceLayerStatus::beyond_capacity | ForceLayerStatus::slipping);
+    risk_hold = at_risk ? hold : (risk_hold > dt ? risk_hold - dt : Scalar(0));
+    return at_risk || risk_hold > Scalar(0);
+  }
   /// Back to idle: integrators, filters, grasp and trajectory progress cleared.
   void reset() noexcept {
     phase = ControllerPhase::idle;
     has_time = false;
     settled_time = manipulation_time = Scalar(0);
-    pose_loop.reset();
+    reset_task_loops();
     pose_gate.reset();
     planner.reset();
     forces.reset();

@@ -110,8 +110,11 @@ enum class ControllerWarning : unsigned {
   joint_position_limited = 1u << 16,  ///< some joint was held at its position limit (IK)
   /// the object twist asks a touching contact to move, along its normal, where a joint
   /// held at its limit cannot follow (workspace_limits.hpp); cut when keep_twist_in_reach
-  /// or when the force layer reports beyond_capacity or slipping
+  /// or while the force layer reports beyond_capacity or slipping (and at_risk_hold after)
   workspace_limited = 1u << 17,
+  /// with workspace_limited: the commanded twist was cut there this tick, so the object
+  /// does not follow the trajectory's twist (Config::keep_twist_in_reach, at_risk_hold)
+  workspace_cut = 1u << 18,
 };
 template <>
 struct is_flags<ControllerWarning> : std::true_type {};

@@ -166,7 +166,7 @@ class ReactiveController {
                                  "farther than start_orientation_tolerance from the measured pose");
     trajectory_ = trajectory;
     state_.manipulation_time = Scalar(0);
-    if (state_.phase != Phase::manipulating) state_.pose_loop.reset();
+    if (state_.phase != Phase::manipulating) state_.reset_task_loops();
     state_.phase = Phase::manipulating;
     for (FingerMemory<Types>& s : state_.fingers)
       if (s.state == FingerState::pressing) s.state = FingerState::in_contact;
