@@ -16,7 +16,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -26,9 +25,6 @@
 
 namespace {
 
-using inhand::Pose;
-using inhand::TrajectorySegment;
-using inhand::Twist;
 namespace ip = inhand::plant;
 namespace ex = inhand::examples;
 

@@ -4,7 +4,8 @@
 // and 3 DOF, spatial 3, 4 and 5 DOF) and the run-time bounded finger (Dynamic,
 // MaxDof = 5), float and double; and the whole ReactiveController::update() of the
 // Shadow-like hand on the analytic plant (grasp, release, hold under gravity, a
-// translation: every force-layer branch), with bounded and with run-time DOF storage.
+// translation: every force-layer branch), with bounded and with run-time DOF storage; and
+// the analytic plant's own per-tick calls.
 //
 // One counter, fed at the bottom of every allocation path, guards the loop: the link of
 // this executable wraps the C allocation functions (tests/CMakeLists.txt: the linker's
@@ -314,6 +315,48 @@ TEST(NoAllocationWholeTick, BoundedAndRunTimeDofShadowLikeHand) {
   ticks = 0;
   EXPECT_EQ(whole_tick_allocations<DynamicDof>(ticks), 0);
   EXPECT_GT(ticks, 1000);
+}
+
+// The analytic plant's per-tick calls (commands, step, sensing, ground truth), which a
+// scenario runs beside the controller at every tick: no allocation either.
+TEST(HandPlantRealtime, TicksDoNotAllocate) {
+  const auto hand = inhand::plant::shadow_like_hand();
+  inhand::plant::PlantParams p = inhand::plant::default_plant_params();
+  p.sensing.normal_force_std = 0.05;
+  p.sensing.normal_angle_std = 0.02;
+  p.sensing.object_rotation_std = 1e-3;
+  p.joint_velocity_lag = 0.005;
+  inhand::plant::HandPlant plant(hand.fingers, inhand::plant::paper_cylinder(hand), p);
+  for (int i = 0; i < plant.finger_count(); ++i)
+    plant.set_joint_positions(i, hand.grasp_configuration[static_cast<std::size_t>(i)]);
+  std::vector<inhand::plant::PlantFinger::JointVector> cmd;
+  for (const auto& f : hand.fingers)
+    cmd.emplace_back(inhand::plant::PlantFinger::JointVector::Constant(f.dof(), 0.1));
+
+  double sink = 0.0;
+  long counted = -1;
+  {
+    NoAllocationRegion region;
+    for (int ms = 0; ms < 200; ++ms) {
+      if (ms == 100) plant.set_frozen(true);
+      if (ms == 150) plant.set_frozen(false);
+      for (int i = 0; i < plant.finger_count(); ++i) {
+        cmd[static_cast<std::size_t>(i)] *= -1.0;
+        plant.set_joint_velocity_command(i, cmd[static_cast<std::size_t>(i)]);
+      }
+      plant.step(1e-3);
+      plant.sample_sensors();
+      sink += plant.measured_object_pose().position.x() + plant.object_twist()(0) +
+              plant.total_energy();
+      for (int i = 0; i < plant.finger_count(); ++i) {
+        sink += plant.tactile(i).normal_force + plant.contact(i).slip_distance;
+        sink += plant.joint_positions(i)(0) + plant.fingertip_pose(i).position.x();
+      }
+    }
+    counted = region.allocations();
+  }
+  EXPECT_EQ(counted, 0);
+  EXPECT_TRUE(std::isfinite(sink));
 }
 
 TEST(NoAllocationCanary, CounterCatchesCppAllocations) {

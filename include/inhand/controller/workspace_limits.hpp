@@ -21,8 +21,8 @@
 // V = (v_o; omega_o) [m/s; rad/s, world frame, about the measured object position p_o]
 // (eq. 2), linear in V: b_n^T x = c^T V with c_k = b_n^T x(e_k) over the basis twists e_k.
 // c^T V > 0 asks for what the held joint cannot give: ControllerWarning::workspace_limited
-// is raised. With Config::keep_twist_in_reach, and without it on a tick whose force layer
-// reports the grasp at risk (beyond_capacity or slipping: the caller's `cut`), the twist
+// is raised. With Config::keep_twist_in_reach, and without it while the force layer reports
+// the grasp at risk and Config::at_risk_hold after (the caller's `cut`), the twist
 // is also projected onto c^T V = 0 (the least change of V in the Euclidean norm of
 // (v_o; omega_o); a twist with c^T V <= 0, away from the limit, is left alone; several
 // constraints in turn, a second sweep when the first cut something), so the object stops
