@@ -74,16 +74,17 @@ class DlsProbe {
   virtual double rounded(double v) const = 0;
   /// The schedule's gain_bound(), computed in the scalar.
   virtual double gain_bound(const Schedule& s) const = 0;
-  /// Rounds M to the scalar as the matrix J under test; returns J in double.
-  virtual MatXd set_matrix(const MatXd& M) = 0;
+  /// M rounded to the scalar (the matrix J under test), in double; the calls below take
+  /// it back exactly.
+  virtual MatXd rounded(const MatXd& M) const = 0;
   /// b rounded to the scalar (Sh::cartesian), in double.
   virtual VecXd rhs(const VecXd& b) const = 0;
-  /// factorize(J, schedule).
-  virtual DlsResult factorize(const OptSchedule& s) = 0;
+  /// factorize(J, schedule), J = A in the scalar.
+  virtual DlsResult factorize(const MatXd& A, const OptSchedule& s) = 0;
   /// factorize(J, schedule), then the pseudo-inverse it applies, in double.
-  virtual MatXd pinv(const OptSchedule& s, DlsResult& result) = 0;
+  virtual MatXd pinv(const MatXd& A, const OptSchedule& s, DlsResult& result) = 0;
   /// factorize(J, schedule), then solve(J, b rounded to the scalar).
-  virtual VecXd solve(const VecXd& b, const OptSchedule& s, DlsResult& result) = 0;
+  virtual VecXd solve(const MatXd& A, const VecXd& b, const OptSchedule& s, DlsResult& result) = 0;
 };
 
 template <typename Sh>
@@ -100,27 +101,26 @@ class Probe final : public DlsProbe {
   double gain_bound(const Schedule& s) const override {
     return static_cast<double>(schedule(s).gain_bound());
   }
-  MatXd set_matrix(const MatXd& M) override {
-    J_ = Sh::jacobian(M);
-    return J_.template cast<double>();
-  }
+  MatXd rounded(const MatXd& M) const override { return Sh::jacobian(M).template cast<double>(); }
   VecXd rhs(const VecXd& b) const override { return Sh::cartesian(b).template cast<double>(); }
-  DlsResult factorize(const OptSchedule& s) override {
-    return converted(dls_.factorize(J_, schedule(s)));
+  DlsResult factorize(const MatXd& A, const OptSchedule& s) override {
+    return converted(dls_.factorize(Sh::jacobian(A), schedule(s)));
   }
-  MatXd pinv(const OptSchedule& s, DlsResult& result) override {
-    result = factorize(s);
+  MatXd pinv(const MatXd& A, const OptSchedule& s, DlsResult& result) override {
+    const typename Sh::Jacobian J = Sh::jacobian(A);
+    result = converted(dls_.factorize(J, schedule(s)));
     typename Dls::Inverse P(Sh::kCols, Sh::kRows);
     P.setZero();  // (GCC 12 cannot see that pseudo_inverse writes every entry)
-    dls_.pseudo_inverse(J_, P);
+    dls_.pseudo_inverse(J, P);
     return P.template cast<double>();
   }
-  VecXd solve(const VecXd& b, const OptSchedule& s, DlsResult& result) override {
-    result = factorize(s);
+  VecXd solve(const MatXd& A, const VecXd& b, const OptSchedule& s, DlsResult& result) override {
+    const typename Sh::Jacobian J = Sh::jacobian(A);
+    result = converted(dls_.factorize(J, schedule(s)));
     typename Dls::Solution x(Sh::kCols);
     x.setZero();
     const typename Dls::Rhs r = b.cast<S>();
-    dls_.solve(J_, r, x);
+    dls_.solve(J, r, x);
     return x.template cast<double>();
   }
 
@@ -138,8 +138,7 @@ class Probe final : public DlsProbe {
             r.valid};
   }
 
-  Dls dls_ = Sh::make_dls();
-  typename Sh::Jacobian J_;
+  Dls dls_ = Sh::make_dls();  ///< the solver's workspace, reused as a controller would
 };
 
 // The four Penrose conditions on random matrices with kappa <= 40 (sigma in [0.05, 2],
@@ -151,9 +150,9 @@ void penrose_identities(DlsProbe& dls) {
   const int count = sweep_count();
   for (int t = 0; t < count; ++t) {
     const VecXd s = random_singular_values(k, 0.05, 2.0, rng);
-    const MatXd A = dls.set_matrix(matrix_with_singular_values(m, n, s, rng));
+    const MatXd A = dls.rounded(matrix_with_singular_values(m, n, s, rng));
     DlsResult res;
-    const MatXd P = dls.pinv(std::nullopt, res);
+    const MatXd P = dls.pinv(A, std::nullopt, res);
     ASSERT_TRUE(res.valid);
     ASSERT_FALSE(res.damped);
     const double kappa = sigma_max(A) / sigma_min(A);
@@ -180,9 +179,9 @@ void matches_complete_orthogonal_decomposition(DlsProbe& dls) {
   const int count = sweep_count();
   for (int t = 0; t < count; ++t) {
     const VecXd s = random_singular_values(k, 0.05, 2.0, rng);
-    const MatXd A = dls.set_matrix(matrix_with_singular_values(m, n, s, rng));
+    const MatXd A = dls.rounded(matrix_with_singular_values(m, n, s, rng));
     DlsResult res;
-    const MatXd P = dls.pinv(std::nullopt, res);
+    const MatXd P = dls.pinv(A, std::nullopt, res);
     const MatXd Pref = reference_pinv(A);
     const double kappa = sigma_max(A) / sigma_min(A);
     const double rel = (P - Pref).norm() / Pref.norm() / (dls.eps() * kappa * kappa);
@@ -200,13 +199,13 @@ void exact_least_squares_or_minimum_norm(DlsProbe& dls) {
   const int count = sweep_count();
   for (int t = 0; t < count; ++t) {
     const VecXd s = random_singular_values(k, 0.05, 2.0, rng);
-    const MatXd A = dls.set_matrix(matrix_with_singular_values(m, n, s, rng));
+    const MatXd A = dls.rounded(matrix_with_singular_values(m, n, s, rng));
     VecXd b = gaussian_vector(m, rng);
     // Least squares: a part in range(J) plus a unit normal to it, so the residual is ~1.
     if (m > n) b = A * gaussian_vector(n, rng) + unit_normal_to_range(A);
     b = dls.rhs(b);
     DlsResult res;
-    const VecXd x = dls.solve(b, std::nullopt, res);
+    const VecXd x = dls.solve(A, b, std::nullopt, res);
     const double kappa = sigma_max(A) / sigma_min(A);
     const double tol = 50 * dls.eps() * kappa * kappa;
     if (m <= n) {
@@ -247,7 +246,7 @@ void damped_tends_to_pseudo_inverse(DlsProbe& dls) {
   for (int t = 0; t < count; ++t) {
     VecXd s = random_singular_values(k, 0.5, 1.5, rng);
     s(k - 1) = smin;
-    const MatXd A = dls.set_matrix(matrix_with_singular_values(m, n, s, rng));
+    const MatXd A = dls.rounded(matrix_with_singular_values(m, n, s, rng));
     const MatXd Pref = reference_pinv(A);
     const double sig = sigma_min(A);
     const double kappa = sigma_max(A) / sig;
@@ -256,7 +255,7 @@ void damped_tends_to_pseudo_inverse(DlsProbe& dls) {
     for (double ratio : ratios) {
       const Schedule sched{threshold, ratio * smin};
       DlsResult res;
-      const MatXd P = dls.pinv(sched, res);
+      const MatXd P = dls.pinv(A, sched, res);
       ASSERT_TRUE(res.damped);
       const double l = dls.rounded(sched.max_damping);
       const double l2 = l * l * (1 - (sig / threshold) * (sig / threshold));
@@ -290,12 +289,12 @@ void singular_solution_bounded_and_damped(DlsProbe& dls) {
     for (double sm : sigmas) {
       VecXd s = random_singular_values(k, 0.2, 2.0, rng);
       s(k - 1) = sm;
-      const MatXd A = dls.set_matrix(matrix_with_singular_values(m, n, s, rng));
+      const MatXd A = dls.rounded(matrix_with_singular_values(m, n, s, rng));
       const VecXd b = dls.rhs(gaussian_vector(m, rng));
       for (const auto& sc : schedules) {
         const Schedule sched{sc[0], sc[1]};
         DlsResult res;
-        const VecXd x = dls.solve(b, sched, res);
+        const VecXd x = dls.solve(A, b, sched, res);
         const double bound = dls.gain_bound(sched) * b.norm();
         ASSERT_TRUE(res.valid);
         ASSERT_TRUE(res.damped) << "sigma_min " << sm;
@@ -344,9 +343,9 @@ void singular_value_sweep_bounded_and_continuous(DlsProbe& dls) {
       VecXd previous;
       for (int p = 0; p < kPoints; ++p) {
         s(k - 1) = 1e-1 * std::pow(rho, -p);
-        const MatXd A = dls.set_matrix(compose(U, s, V));
+        const MatXd A = dls.rounded(compose(U, s, V));
         DlsResult res;
-        const VecXd x = dls.solve(b, sched, res);
+        const VecXd x = dls.solve(A, b, sched, res);
         ASSERT_TRUE(x.allFinite());
         ASSERT_LE(x.norm(), gb * (1 + tol)) << "sigma " << s(k - 1);
         const double l2 = res.damping * res.damping;
@@ -385,8 +384,8 @@ void min_singular_value_matches_jacobi_svd(DlsProbe& dls) {
     const double smin = std::exp(uniform(rng, std::log(1e-6), 0.0));
     VecXd s = random_singular_values(k, smin, 2.0, rng);
     s(k - 1) = smin;
-    const MatXd A = dls.set_matrix(matrix_with_singular_values(m, n, s, rng));
-    const DlsResult res = dls.factorize(std::nullopt);
+    const MatXd A = dls.rounded(matrix_with_singular_values(m, n, s, rng));
+    const DlsResult res = dls.factorize(A, std::nullopt);
     ASSERT_TRUE(res.valid);
     const VecXd sv = singular_values(A);
     ASSERT_EQ(sv.size(), k);
