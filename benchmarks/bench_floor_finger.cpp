@@ -3,8 +3,10 @@
 // finger/<case>: forward_kinematics + point_jacobian at the contact point + hybrid
 //   servo update + ContactIk::solve: everything the controller does per touching
 //   finger (layer 3) apart from the bookkeeping.
-// floor/sincos4: the 4-joint finger's unavoidable transcendental work, std::sin and
-//   std::cos of each of its 4 joint angles (independent, as in forward kinematics).
+// floor/sincos4: the 4-joint finger's unavoidable transcendental work, the sines and
+//   cosines of its 4 joint angles by inhand::sin_cos (math/sin_cos.hpp), as forward
+//   kinematics evaluates them; floor/sincos4_libm: the same by std::sin and std::cos, one
+//   angle at a time (the floor before forward kinematics used sin_cos).
 // floor/solve3x4: the dependency chain of the 3x4 minimum-norm solve at its bare
 //   minimum: Gram matrix J J^T, 3x3 Cholesky (3 square roots, 3 reciprocals), the
 //   two triangular substitutions and x = J^T y, with no checks, no singular-value
@@ -15,6 +17,7 @@
 namespace inhand_bench {
 namespace {
 
+template <bool kLibm>
 class SinCosFloorFixture {
  public:
   static constexpr long kMaintenancePeriod = 0;
@@ -28,9 +31,13 @@ class SinCosFloorFixture {
 
   [[gnu::noinline]] double tick() noexcept {
     const std::array<double, 4>& a = angles_[next_++ & (kSamples - 1)];
-    for (std::size_t i = 0; i < 4; ++i) {
-      out_[2 * i] = std::sin(a[i]);
-      out_[2 * i + 1] = std::cos(a[i]);
+    if constexpr (kLibm) {
+      for (std::size_t i = 0; i < 4; ++i) {
+        out_[i] = std::sin(a[i]);
+        out_[4 + i] = std::cos(a[i]);
+      }
+    } else {
+      inhand::sin_cos(a.data(), out_.data(), out_.data() + 4, 4);
     }
     return out_[0];
   }
@@ -144,7 +151,8 @@ void add_finger(const std::string& label, const std::string& storage, const Hand
 }  // namespace
 
 void register_floor_benchmarks() {
-  add<SinCosFloorFixture>("floor/sincos4/double", true, std::uint64_t{404});
+  add<SinCosFloorFixture<false>>("floor/sincos4/double", true, std::uint64_t{404});
+  add<SinCosFloorFixture<true>>("floor/sincos4_libm/double", true, std::uint64_t{404});
   add<SolveFloorFixture>("floor/solve3x4/double", true, std::uint64_t{404});
 }
 

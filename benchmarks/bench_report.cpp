@@ -243,7 +243,8 @@ int main(int argc, char** argv) {
       {"ik/3x4_damped/double/fixed", "IK, damped (near-singular 3x4)"},
       {"servo/spatial/double/fixed", "hybrid servo, one finger"},
       {"planner/shadow4/double/fixed", "force planner, 4 fingers"},
-      {"floor/sincos4/double", "floor: sin + cos of 4 joint angles"},
+      {"floor/sincos4/double", "floor: sin + cos of 4 joint angles (inhand::sin_cos)"},
+      {"floor/sincos4_libm/double", "the same by std::sin and std::cos"},
       {"floor/solve3x4/double", "floor: bare 3x4 Cholesky solve chain"},
   };
   for (const auto& [name, what] : key) md << r.row(name, what) << "\n";

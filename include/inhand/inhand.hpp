@@ -9,6 +9,7 @@
 #include "inhand/math/status.hpp"
 #include "inhand/math/so3.hpp"
 #include "inhand/math/pose.hpp"
+#include "inhand/math/sin_cos.hpp"
 #include "inhand/math/pi_controller.hpp"
 #include "inhand/math/damped_least_squares.hpp"
 #include "inhand/kinematics/contact_kinematics.hpp"

@@ -9,21 +9,14 @@
 #pragma once
 
 #include <cmath>
+#include <type_traits>
 
 #include "inhand/kinematics/chain_model.hpp"
+#include "inhand/math/sin_cos.hpp"
 
 namespace inhand {
 
 namespace detail {
-template <typename Scalar>
-inline Rotation<Scalar, 3> joint_rotation(const Vector<Scalar, 3>& axis, Scalar q) noexcept {
-  return Eigen::AngleAxis<Scalar>(q, axis).toRotationMatrix();
-}
-template <typename Scalar>
-inline Rotation<Scalar, 2> joint_rotation(const Vector<Scalar, 2>&, Scalar q) noexcept {
-  return so2_exp<Scalar>(q);
-}
-
 /// k when `axis` is exactly +e_k or -e_k (sign set to +1 or -1), otherwise -1.
 template <typename Scalar>
 inline int coordinate_axis(const Vector<Scalar, 3>& axis, Scalar& sign) noexcept {
@@ -68,16 +61,21 @@ inline void turn_joint(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Sc
   turn_about_coordinate_axis<Scalar>(R, k, c, sign * s);
 }
 
-/// The joint of forward_kinematics: a general axis by Eigen's AngleAxis (equal to the
-/// coordinate-axis result up to rounding).
-template <typename Scalar, typename DerivedAxis>
-inline void apply_joint(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Scalar q,
-                        const Eigen::MatrixBase<DerivedAxis>& world_axis_out) noexcept {
-  turn_joint<Scalar>(R, axis, std::sin(q), std::cos(q), world_axis_out,
-                     [&](Rotation<Scalar, 3>& Rg) { Rg = Rg * joint_rotation<Scalar>(axis, q); });
+/// The sine and cosine forward_kinematics turns a joint by: sin_cos() in double (one pair
+/// costs about 50 instructions inline against 110 for glibc's sincos, counted under
+/// callgrind in the controller's tick); std::sin and std::cos in other types (glibc's
+/// sincosf, about 36 instructions a pair, beats sin_cos's float kernel at about 55).
+template <typename Scalar>
+inline void joint_sin_cos(Scalar q, Scalar& s, Scalar& c) noexcept {
+  if constexpr (std::is_same<Scalar, double>::value) {
+    sin_cos<Scalar>(q, s, c);
+  } else {
+    s = std::sin(q);
+    c = std::cos(q);
+  }
 }
 
-/// The joint of forward_kinematics_sincos: a general axis by Rodrigues' formula
+/// One spatial joint given s = sin q and c = cos q; a general axis by Rodrigues' formula
 /// Rot(axis, q) = I + s K + (1 - c) K^2 with K = [axis]x.
 template <typename Scalar, typename DerivedAxis>
 inline void apply_joint_sincos(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Scalar s,
@@ -147,28 +145,37 @@ inline void walk_chain(const Chain& chain, FingerKinematics<Chain>& ws, TurnJoin
 }
 }  // namespace detail
 
-/// Forward kinematics: fills `ws` for joint angles q (size dof). noexcept, no allocation.
+/// Forward kinematics: fills `ws` for joint angles q (size dof). In double each joint's
+/// sine and cosine come from sin_cos() (math/sin_cos.hpp: inline polynomials, within one
+/// unit in the last place of 1 of std::sin / std::cos), so the result equals
+/// forward_kinematics_sincos given sin_cos()'s values; in float from std::sin and std::cos
+/// (detail::joint_sin_cos says why). noexcept, no allocation.
 template <typename Chain, typename DerivedQ>
 inline void forward_kinematics(const Chain& chain, const Eigen::MatrixBase<DerivedQ>& q,
                                FingerKinematics<Chain>& ws) noexcept {
   using Scalar = typename Chain::Scalar;
   constexpr int Dim = Chain::Dim;
   detail::walk_chain(chain, ws, [&](Rotation<Scalar, Dim>& R, int i, auto&& world_axis) {
+    Scalar sin_q, cos_q;
+    detail::joint_sin_cos<Scalar>(static_cast<Scalar>(q(i)), sin_q, cos_q);
     const auto& j = chain.joints[i];
     if constexpr (Dim == 3) {
-      detail::apply_joint<Scalar>(R, j.axis, static_cast<Scalar>(q(i)), world_axis);
+      detail::apply_joint_sincos<Scalar>(R, j.axis, sin_q, cos_q, world_axis);
     } else {
+      // Planar: the axis is +z or -z (validated); Rot(-z, q) = Rot(z, -q).
+      const Scalar s = j.axis.z() * sin_q, c = cos_q;
       world_axis = Vector<Scalar, 3>(Scalar(0), Scalar(0), j.axis.z());
-      R = R * so2_exp<Scalar>(j.axis.z() * q(i));
+      Rotation<Scalar, 2> Rj;
+      Rj << c, -s, s, c;
+      R = R * Rj;
     }
   });
 }
 
 /// Forward kinematics in space from the sines and cosines of the joint angles (each of
 /// size dof) instead of the angles, for a caller that keeps them up to date itself (the
-/// simulator advances them by the angle-addition formula). A joint about a coordinate
-/// axis turns exactly as in forward_kinematics; a general axis by Rodrigues' formula
-/// (equal to forward_kinematics up to rounding). noexcept, no allocation.
+/// simulator advances them by the angle-addition formula). Given sin_cos()'s values it
+/// equals forward_kinematics exactly. noexcept, no allocation.
 template <typename Chain, typename DerivedS, typename DerivedC>
 inline void forward_kinematics_sincos(const Chain& chain, const Eigen::MatrixBase<DerivedS>& sin_q,
                                       const Eigen::MatrixBase<DerivedC>& cos_q,
