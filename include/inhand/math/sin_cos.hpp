@@ -8,8 +8,8 @@
 // kernel_cos in double, of Cephes' sinf and cosf in float; the quadrant k mod 4 swaps and
 // signs them. The loop has no branch, so a compiler evaluates several angles per vector
 // instruction (two doubles per SSE2 or NEON register, four per AVX2 register); every
-// operation is plain C++, there are no intrinsics. The library's sin and cos calls of
-// libm instead take one angle at a time, and a call each.
+// operation is plain C++, there are no intrinsics. libm's sin and cos take one angle per
+// call. forward_kinematics uses the one-angle form in double (kinematics/finger_chain.hpp).
 //
 // Accuracy against std::sin and std::cos, measured over seeded sweeps by
 // tests/math/sin_cos_test.cpp (x86-64, GCC 12): within kReducedRange = 1e5 rad (double)
@@ -20,8 +20,9 @@
 // std::sin and std::cos of the angle (a second, scalar pass), so a non-finite angle gives NaN as
 // there. Joint angles are within a few pi of 0. Other Scalar types (long double, automatic
 // differentiation types) use std::sin and std::cos throughout.
-// The rounding of k to the nearest integer converts to int by truncation after adding
-// +-1/2, so neither the floating-point rounding mode nor -ffast-math changes the result.
+// k is rounded to the nearest integer by truncating q 2/pi +- 1/2 to int, so the
+// floating-point rounding mode does not change it. Compiled with -ffast-math, the
+// reduction's three parts may be reassociated and the accuracy above is not kept.
 // noexcept, no allocation, n >= 0 angles; q, s and c must not overlap.
 #pragma once
 
