@@ -82,6 +82,7 @@ inline PlanarController::Config box2d_controller_config() {
   // weight is carried by the table or, with gravity, well inside the friction cone), and
   // the demo holds the measured forces within 0.1 N of their targets throughout.
   c.force_layer.release_grip = 1.0;
+  c.force_layer.release_load = 0.0;
   // A slip raises the grip as a ramp (no step at its onset), at a rate the force loop
   // follows within 0.1 N.
   c.force_layer.friction_margin = 1.0;

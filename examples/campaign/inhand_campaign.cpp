@@ -114,6 +114,12 @@ int main(int argc, char** argv) {
                  "controller Config::at_risk_hold (s): how long the twist's cut made while the "
                  "grasp is at risk stays on after the last tick at risk")
       ->check(CLI::Range(0.0, 10.0));
+  double release_load = inhand::plant::HandController::Config{}.force_layer.release_load;
+  app.add_option("--release-load", release_load,
+                 "controller Config::force_layer.release_load (N): the load the grip at release "
+                 "is sized to take without a contact falling below min_force (0: release_grip "
+                 "alone)")
+      ->check(CLI::Range(0.0, 1000.0));
   std::string trace;
   app.add_option("--trace", trace, "per-tick trace CSV of the one case run (needs --count 1)");
   CLI11_PARSE(app, argc, argv);
@@ -131,6 +137,7 @@ int main(int argc, char** argv) {
     Case c = make_case(seed, wide);
     c.spec.controller.keep_twist_in_reach = keep_in_reach;
     c.spec.controller.at_risk_hold = at_risk_hold;
+    c.spec.controller.force_layer.release_load = release_load;
     const Outcome o = evaluate(c, trace);
     if (o.success) {
       ++ok;

@@ -46,4 +46,15 @@ if(INHAND_HAVE_CAMPAIGN)
   set_tests_properties(campaign.thumb_at_a_limit_grasp_at_risk_1620
                        campaign.wide_thumb_at_a_limit_grasp_at_risk_550
                        PROPERTIES LABELS campaign TIMEOUT 120)
+  # Wide-range cases that lost a contact a few milliseconds after release: heavy spheres on
+  # the three-finger hand (114: 395 g, 634: 343 g, 792: 367 g), whose released weight took
+  # a finger's whole grip at release_grip 2. The grasp now presses with a grip sized so
+  # that release_load (4 N) along any direction leaves every finger min_force
+  # (controller/grasp.hpp, "Release grip"); with --release-load 0 each fails again.
+  foreach(seed 114 634 792)
+    add_test(NAME campaign.wide_release_grip_sized_for_the_load_${seed}
+             COMMAND inhand_campaign --wide --first-seed ${seed} --count 1 --min-success 1)
+    set_tests_properties(campaign.wide_release_grip_sized_for_the_load_${seed}
+                         PROPERTIES LABELS campaign TIMEOUT 120)
+  endforeach()
 endif()

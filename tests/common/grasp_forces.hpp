@@ -2,8 +2,10 @@
 // for the tests that check them: the force planner's pattern over the grasp targets'
 // expected normals, every finger counted as touching, from a replica planner of the
 // configuration (preset fingers nominal_force, balancing fingers what cancels the
-// resultant), scaled by force_layer.release_grip, or less so that none exceeds max_force.
-// Units: N.
+// resultant), scaled by s_g: force_layer.release_grip, or more where a load of
+// force_layer.release_load along any direction would take some finger below min_force
+// under the equal-stiffness translation response (grasp.hpp "Release grip"), or less so
+// that none exceeds max_force. Units: N.
 #pragma once
 
 #include <algorithm>
@@ -26,14 +28,24 @@ std::vector<Scalar> grasp_forces(const Config& config, const Targets& targets) {
   Eigen::Matrix<Scalar, Dim, Eigen::Dynamic> normals(Dim, n);
   for (int i = 0; i < n; ++i) {
     planner.set_role(i, config.fingers[static_cast<std::size_t>(i)].role);
-    normals.col(i) = targets[static_cast<std::size_t>(i)].normal;
+    normals.col(i) = targets[static_cast<std::size_t>(i)].normal.normalized();
   }
   Eigen::Matrix<Scalar, Eigen::Dynamic, 1> f(n);
   inhand::Vector<Scalar, Dim> residual;
   planner.plan(touching, normals, Scalar(1e-3), f, residual);
-  // One scale for every finger: release_grip, or the largest that keeps all within max_force.
-  const Scalar scale = std::min(static_cast<Scalar>(config.force_layer.release_grip),
-                                config.force_planner.max_force / f.maxCoeff());
+  // One scale for every finger: release_grip, raised so that each finger keeps min_force
+  // when it loses release_load |G^-1 n_i| (G = sum n n^T + rigid_tolerance I), then the
+  // largest that keeps all within max_force.
+  Eigen::Matrix<Scalar, Dim, Dim> G =
+      config.force_layer.rigid_tolerance * Eigen::Matrix<Scalar, Dim, Dim>::Identity();
+  for (int i = 0; i < n; ++i) G += normals.col(i) * normals.col(i).transpose();
+  Scalar wanted = static_cast<Scalar>(config.force_layer.release_grip);
+  for (int i = 0; i < n; ++i) {
+    const Scalar loss =
+        config.force_layer.release_load * G.ldlt().solve(normals.col(i).eval()).norm();
+    if (f(i) > Scalar(0)) wanted = std::max(wanted, (config.force_planner.min_force + loss) / f(i));
+  }
+  const Scalar scale = std::min(wanted, config.force_planner.max_force / f.maxCoeff());
   std::vector<Scalar> out(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) out[static_cast<std::size_t>(i)] = scale * f(i);
   return out;

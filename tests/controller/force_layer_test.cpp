@@ -522,6 +522,27 @@ TEST(ForceLayer, ForceLoopGainFollowsTheServo) {
   EXPECT_EQ(press(J, z, 1000.0, K), z);
 }
 
+TEST(ForceLayer, GripStartsAtTheGraspsGripWhenGiven) {
+  // Step::release_grip (the grasp's s_g, sized for the release load) replaces
+  // ForceLayerParams::release_grip on the first free tick, then decays the same way.
+  Grasp g;
+  Layer layer;
+  Layer::Result r;
+  for (int t = 0; t < 10; ++t) layer.update(g.step(1e-3, false), r);
+  Layer::Step step = g.step(1e-3, true);
+  step.max_force = 100.0;  // no cap on the grip here
+  step.release_grip = 3.5;
+  layer.update(step, r);
+  const double tau = layer.params().grip_decay_time;
+  EXPECT_NEAR(r.grip, 1.0 + 2.5 * std::exp(-1e-3 / tau), 1e-12);
+  // Below ForceLayerParams::release_grip it is still what the grasp pressed with.
+  Layer again;
+  for (int t = 0; t < 10; ++t) again.update(g.step(1e-3, false), r);
+  step.release_grip = 1.25;
+  again.update(step, r);
+  EXPECT_NEAR(r.grip, 1.0 + 0.25 * std::exp(-1e-3 / tau), 1e-12);
+}
+
 TEST(ForceLayer, ParamsNameTheField) {
   inhand::ForceLayerParams<double> p;
   EXPECT_TRUE(p.validate().ok());
@@ -533,6 +554,9 @@ TEST(ForceLayer, ParamsNameTheField) {
   p = {};
   p.release_grip = 0.9;
   EXPECT_STREQ(p.validate().field, "force_layer.release_grip");
+  p = {};
+  p.release_load = -1.0;
+  EXPECT_STREQ(p.validate().field, "force_layer.release_load");
   p = {};
   p.contact_damping = -1.0;
   EXPECT_STREQ(p.validate().field, "force_layer.contact_damping");

@@ -1,12 +1,14 @@
 // Tests of the grasp-phase primitives (controller/grasp.hpp): approach_velocity's
 // saturation and its creep along -n (also past the expected contact point, when the
-// object is smaller than expected), parameter and target validation.
+// object is smaller than expected), the release grip's sizing against the load it must
+// take, parameter and target validation.
 #include "inhand/controller/grasp.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -96,6 +98,96 @@ TEST(ApproachVelocity, KeepsCreepingPastTheExpectedContactPoint) {
   // Tangentially it converges on the target.
   EXPECT_LT(std::abs(p.x() - p_t.x()), 1e-6);
   record("depth_past_target_m", depth);
+}
+
+// release_grip_scale: with s = the returned scale and no cap binding, every finger keeps
+// at least min_force under the equal-stiffness translation response to any load w with
+// |w| <= release_load (force change n_i^T G^-1 w, grasp.hpp "Release grip"), the bound
+// is reached by the finger that sets s (for w along -G^-1 n_i), s >= release_grip, and
+// no s q_i exceeds max_force.
+template <int Dim>
+void check_release_grip_scale(std::uint64_t seed) {
+  using Vec = inhand::Vector<double, Dim>;
+  using Mat = Eigen::Matrix<double, Dim, Dim>;
+  auto rng = inhand_test::make_rng(seed);
+  std::uniform_int_distribution<int> count(2, 5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const int cases = scaled(500);
+  int binding = 0, capped = 0;
+  double worst_margin = 1e9;
+  for (int k = 0; k < cases; ++k) {
+    const int n = count(rng);
+    Eigen::Matrix<double, Dim, Eigen::Dynamic> N(Dim, n);
+    Eigen::VectorXd q(n);
+    for (int i = 0; i < n; ++i) {
+      N.col(i) = inhand_test::random_unit_vector<double, Dim>(rng);
+      q(i) = 0.2 + 2.0 * unit(rng);
+    }
+    inhand::ForceLayerParams<double> fl;
+    fl.release_grip = 1.0 + 2.0 * unit(rng);
+    fl.release_load = 8.0 * unit(rng);
+    fl.rigid_tolerance = 0.01 + 0.3 * unit(rng);
+    const double min_force = 0.5 * unit(rng);
+    const double max_force = k % 4 == 0 ? 3.0 : 1e3;  // a quarter of the cases with a low cap
+    const double s = inhand::release_grip_scale(N, q, fl, min_force, max_force);
+    ASSERT_TRUE(std::isfinite(s));
+    for (int i = 0; i < n; ++i) ASSERT_LE(s * q(i), max_force * (1 + 1e-12));
+    const bool cap = std::abs(s * q.maxCoeff() - max_force) <= 1e-12 * max_force;
+    capped += cap ? 1 : 0;
+    if (cap) continue;
+    EXPECT_GE(s, fl.release_grip);
+    Mat G = fl.rigid_tolerance * Mat::Identity();
+    for (int i = 0; i < n; ++i) G += N.col(i) * N.col(i).transpose();
+    const Mat G_inv = G.inverse();
+    double tightest = 1e9;
+    for (int i = 0; i < n; ++i) {
+      const Vec worst = -fl.release_load * (G_inv * N.col(i)).normalized();  // largest loss
+      for (int trial = 0; trial < 20; ++trial) {
+        const Vec w = trial == 0 ? worst
+                                 : Vec(fl.release_load * unit(rng) *
+                                       inhand_test::random_unit_vector<double, Dim>(rng));
+        const double f = s * q(i) + N.col(i).dot(G_inv * w);
+        EXPECT_GE(f, min_force - 1e-9) << "finger " << i << " case " << k;
+        if (trial == 0) tightest = std::min(tightest, f - min_force);
+      }
+    }
+    worst_margin = std::min(worst_margin, tightest);
+    if (s > fl.release_grip * (1 + 1e-9) && fl.release_load > 0) {
+      EXPECT_NEAR(tightest, 0.0, 1e-9) << "case " << k;  // the finger that sets s is at min_force
+      ++binding;
+    }
+  }
+  record("release_grip_scale.cases_sized_by_the_load", binding);
+  record("release_grip_scale.cases_capped", capped);
+  EXPECT_GT(binding, cases / 10);  // the sweep exercises the load bound, not only release_grip
+  EXPECT_GT(capped, 0);
+}
+
+TEST(ReleaseGripScale, EveryFingerKeepsMinForceUnderTheLoadPlanar) {
+  check_release_grip_scale<2>(21);
+}
+TEST(ReleaseGripScale, EveryFingerKeepsMinForceUnderTheLoadSpatial) {
+  check_release_grip_scale<3>(22);
+}
+
+TEST(ReleaseGripScale, OpposedPairAndNoLoad) {
+  // Two opposed fingers along x with q = 1 N: G = diag(2 + eps, eps, eps), so a load along
+  // x takes |w| / (2 + eps) from one finger. With 4 N, eps 0.1, min_force 0.2:
+  // s = 0.2 + 4 / 2.1 = 2.105 (above release_grip 2). With no load: release_grip.
+  Eigen::Matrix<double, 3, 2> N;
+  N.col(0) = Eigen::Vector3d::UnitX();
+  N.col(1) = -Eigen::Vector3d::UnitX();
+  const Eigen::Vector2d q(1.0, 1.0);
+  inhand::ForceLayerParams<double> fl;
+  fl.release_grip = 2.0;
+  fl.release_load = 4.0;
+  fl.rigid_tolerance = 0.1;
+  EXPECT_NEAR(inhand::release_grip_scale(N, q, fl, 0.2, 6.0), 0.2 + 4.0 / 2.1, 1e-12);
+  fl.release_load = 0.0;
+  EXPECT_DOUBLE_EQ(inhand::release_grip_scale(N, q, fl, 0.2, 6.0), 2.0);
+  // The cap: max_force 1.5 N with q = 1 N allows s = 1.5 only.
+  fl.release_load = 4.0;
+  EXPECT_DOUBLE_EQ(inhand::release_grip_scale(N, q, fl, 0.2, 1.5), 1.5);
 }
 
 TEST(GraspParams, ValidationNamesTheField) {

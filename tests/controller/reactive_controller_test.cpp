@@ -316,6 +316,7 @@ Scene<Ctrl> planar_scene(
   // These tests hold the controller to the paper's planner (eq. 8's pattern, unscaled):
   // no raised grip at release (force_layer_test.cpp covers it).
   s.config.force_layer.release_grip = 1.0;
+  s.config.force_layer.release_load = 0.0;
   return s;
 }
 
@@ -362,6 +363,7 @@ Scene<MixedCtrl> mixed_scene() {
     s.targets[k].normal = sp.normal;
   }
   s.config.force_layer.release_grip = 1.0;  // the paper's planner, unscaled (as above)
+  s.config.force_layer.release_load = 0.0;
   return s;
 }
 
@@ -864,6 +866,28 @@ TEST(ReactiveControllerGrasp, FingersApproachTouchAndReachTheNominalForce) {
   for (int k = 0; k < 50; ++k) EXPECT_EQ(tick(c, s.plant, in, out), ControllerStatus::grasped);
   record("grasp_time_s", ticks * s.plant.dt);
   record("ik_relative_residual", worst_ik);
+}
+
+TEST(ReactiveControllerGrasp, GraspForcesAreSizedForTheReleaseLoad) {
+  // Thumb on -x against two fingers on +x: G = sum n n^T + 0.1 I has 3.1 along x, so a
+  // load along x takes |w| / 3.1 from a finger; for 6 N the fingers of 1 N need
+  // s = 0.2 + 6 / 3.1 = 2.14 > release_grip 2 (the thumb, 2 N, only 1.07). Without the
+  // load: release_grip.
+  Scene<MixedCtrl> s = mixed_scene();
+  s.config.force_layer.release_grip = 2.0;
+  s.config.force_layer.release_load = 6.0;
+  s.config.force_planner.max_force = 100.0;
+  MixedCtrl c;
+  ASSERT_TRUE(c.configure(s.config).ok());
+  ASSERT_TRUE(c.start_grasp(s.targets).ok());
+  const Eigen::VectorXd f = grasp_forces(s);  // the replica, sized independently
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(c.grasp_force(i), f(i), 1e-12) << i;
+  const double pattern_finger = 1.0;  // the preset fingers' nominal force
+  EXPECT_GT(c.grasp_force(1), 2.0 * pattern_finger * 1.05);
+  s.config.force_layer.release_load = 0.0;
+  ASSERT_TRUE(c.configure(s.config).ok());
+  ASSERT_TRUE(c.start_grasp(s.targets).ok());
+  EXPECT_NEAR(c.grasp_force(1), 2.0 * pattern_finger, 1e-9);
 }
 
 TEST(ReactiveControllerGrasp, GraspForcesAreOneScaleOfThePatternWithinMaxForce) {

@@ -452,19 +452,19 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
   {
     const inhand::ForceLayerParams<double>& fa = c.force_layer;
     const inhand::ForceLayerParams<double>& fb = dc.force_layer;
-    const double got_fl[] = {fa.bandwidth,      fa.integral_corner,       fa.min_stiffness,
-                             fa.max_stiffness,  fa.stiffness_window,      fa.min_excitation,
-                             fa.min_fit,        fa.max_integral_velocity, fa.slip_distance,
-                             fa.grip_rise_rate, fa.friction_margin,       fa.grip_decay_time,
-                             fa.release_grip,   fa.rigid_tolerance,       fa.contact_damping,
-                             fa.capacity_time,  fa.servo_stiffness,       fa.servo_damping};
-    const double want_fl[] = {fb.bandwidth,      fb.integral_corner,       fb.min_stiffness,
-                              fb.max_stiffness,  fb.stiffness_window,      fb.min_excitation,
-                              fb.min_fit,        fb.max_integral_velocity, fb.slip_distance,
-                              fb.grip_rise_rate, fb.friction_margin,       fb.grip_decay_time,
-                              fb.release_grip,   fb.rigid_tolerance,       fb.contact_damping,
-                              fb.capacity_time,  fb.servo_stiffness,       fb.servo_damping};
-    for (std::size_t k = 0; k < 18; ++k)
+    const double got_fl[] = {
+        fa.bandwidth,        fa.integral_corner, fa.min_stiffness,   fa.max_stiffness,
+        fa.stiffness_window, fa.min_excitation,  fa.min_fit,         fa.max_integral_velocity,
+        fa.slip_distance,    fa.grip_rise_rate,  fa.friction_margin, fa.grip_decay_time,
+        fa.release_grip,     fa.rigid_tolerance, fa.contact_damping, fa.capacity_time,
+        fa.servo_stiffness,  fa.servo_damping,   fa.release_load};
+    const double want_fl[] = {
+        fb.bandwidth,        fb.integral_corner, fb.min_stiffness,   fb.max_stiffness,
+        fb.stiffness_window, fb.min_excitation,  fb.min_fit,         fb.max_integral_velocity,
+        fb.slip_distance,    fb.grip_rise_rate,  fb.friction_margin, fb.grip_decay_time,
+        fb.release_grip,     fb.rigid_tolerance, fb.contact_damping, fb.capacity_time,
+        fb.servo_stiffness,  fb.servo_damping,   fb.release_load};
+    for (std::size_t k = 0; k < 19; ++k)
       EXPECT_EQ(got_fl[k], want_fl[k]) << "force_layer field " << k;
   }
   EXPECT_EQ(c.outlier_gates.max_object_speed, dc.outlier_gates.max_object_speed);

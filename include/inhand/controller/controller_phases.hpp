@@ -65,6 +65,7 @@ void run_force_layer(const TickInput<Types>& t, bool object_free, ControllerStat
   step.min_force = t.config.force_planner.min_force;
   step.max_force = t.config.force_planner.max_force;
   step.object_free = object_free;
+  step.release_grip = st.grasp_grip;
   step.dt = t.dt;
   st.forces.update(step, sc.forces);
 }
@@ -118,9 +119,8 @@ FingerPoints<Types> finger_points(const TickInput<Types>& t, int i, TickScratch<
 /// Start of the grasp phase towards `targets` (validated): each finger's target, its
 /// grasp pattern q_g -- the planner's pattern over the targets' expected normals, every
 /// finger counted as touching (grasp.hpp); planned once, which also primes the planner's
-/// filter with it -- its grasp force f_g = s_g q_g, and fresh grasp memory. s_g =
-/// release_grip, or less if that would take some f_g above max_force: one scale for every
-/// finger keeps the pattern's balance (as the force layer's cap does).
+/// filter with it -- its grasp force f_g = s_g q_g (s_g: release_grip_scale() over the
+/// targets' normals, grasp.hpp; one scale keeps the pattern's balance), fresh memory.
 template <typename Types, typename Targets>
 void begin_grasp(const typename Types::Config& config, const Targets& targets,
                  ControllerState<Types>& st, TickScratch<Types>& sc) noexcept {
@@ -132,10 +132,10 @@ void begin_grasp(const typename Types::Config& config, const Targets& targets,
   typename Types::Vec residual;
   st.planner.reset();
   st.planner.plan(sc.touching, sc.normals, config.control_period, sc.pattern, residual);
-  typename Types::ScalarType scale = config.force_layer.release_grip;
-  for (int i = 0; i < n; ++i)
-    if (scale * sc.pattern(i) > config.force_planner.max_force)
-      scale = config.force_planner.max_force / sc.pattern(i);
+  const auto scale = st.grasp_grip =
+      release_grip_scale(sc.normals.leftCols(n), sc.pattern.head(n), config.force_layer,
+                         config.force_planner.min_force, config.force_planner.max_force);
+  st.grasp_grip_measured = false;
   for (int i = 0; i < n; ++i) {
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     m.target = targets[static_cast<std::size_t>(i)];
@@ -156,6 +156,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
   using Scalar = typename Types::ScalarType;
   const GraspParams<Scalar>& g = t.config.grasp;
   ControllerWarning w = out.warnings;
+  detail::size_grip_on_measured_normals(t.config, t.in, st, sc);
   // A placed finger presses with its grasp force f_g, a finger not yet placed slides to
   // its target with slide_force_fraction of its pattern q_g (both set by start_grasp).
   for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {

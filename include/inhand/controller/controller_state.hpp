@@ -63,6 +63,8 @@ struct ControllerState {
   Scalar settled_time = Scalar(0);       ///< s the grasp criterion has held
   Scalar manipulation_time = Scalar(0);  ///< s since start_manipulation
   Scalar risk_hold = Scalar(0);          ///< s the at-risk cut stays on (Config::at_risk_hold)
+  Scalar grasp_grip = Scalar(0);         ///< s_g of the grasp (grasp.hpp); 0: none begun
+  bool grasp_grip_measured = false;      ///< s_g sized over the measured normals yet
   PoseLoop<Scalar, Dim> pose_loop{};
   PoseGate<Scalar, Dim> pose_gate{};
 
@@ -161,5 +163,36 @@ struct TickScratch {
     forces.slipping.setZero(n);
   }
 };
+
+namespace detail {
+/// On the first grasp tick every finger is placed and touching, s_g is sized again over
+/// the measured normals and raised to that if higher: the grasp then presses with
+/// f_g = s_g q_g of the contacts it has (grasp.hpp). Uses sc.normals and sc.pattern as
+/// its workspace (the grasp phase writes both after it on every tick).
+template <typename Types>
+void size_grip_on_measured_normals(const typename Types::Config& config,
+                                   const typename Types::Input& in, ControllerState<Types>& st,
+                                   TickScratch<Types>& sc) noexcept {
+  if (st.grasp_grip_measured) return;
+  const int n = static_cast<int>(st.fingers.size());
+  for (int i = 0; i < n; ++i) {
+    const FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+    const typename Types::FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
+    if (!f.contact.touching || !m.settle.placed) return;
+    sc.normals.col(i) = f.contact.normal.normalized();
+    sc.pattern(i) = m.grasp_pattern;
+  }
+  const typename Types::ScalarType s =
+      release_grip_scale(sc.normals.leftCols(n), sc.pattern.head(n), config.force_layer,
+                         config.force_planner.min_force, config.force_planner.max_force);
+  st.grasp_grip_measured = true;
+  if (!(s > st.grasp_grip)) return;
+  st.grasp_grip = s;
+  for (int i = 0; i < n; ++i) {
+    FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+    m.grasp_force = s * m.grasp_pattern;
+  }
+}
+}  // namespace detail
 
 }  // namespace inhand

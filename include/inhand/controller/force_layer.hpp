@@ -41,10 +41,10 @@
 //
 // Grip that follows the load. s is the largest of
 //   1                 the nominal grip (the planner's pattern);
-//   s_release         release_grip on the first tick the object is free, decaying to 1
-//                     like s_slip: the load the grasp could not feel (the object was
-//                     held) arrives at release as a step, faster than a slip can be
-//                     felt and answered, so the grip meets it raised;
+//   s_release         Step::release_grip (the grasp's s_g, grasp.hpp; 0: release_grip) on
+//                     the first free tick, decaying to 1 like s_slip: the load the grasp
+//                     could not feel (the object was held) arrives at release as a step,
+//                     faster than a slip is felt and answered, so the grip meets it raised;
 //   s_min_force       the least s for which every target force s (P_int q)_i +
 //                     (P_r f_m)_i is at least min_force: a normal load taken from a
 //                     finger is given back by squeezing harder;
@@ -96,8 +96,7 @@ class ForceLayer {
     const Points* normals = nullptr;
     const ForceVector* measured = nullptr;
     const ForceVector* pattern = nullptr;
-    /// Per finger, the fingertip's measured displacement at its contact over the last
-    /// tick [m], world frame: J (q - q_prev) (d_tip of contact_observers.hpp).
+    /// Fingertip steps at the contacts over the last tick [m], world: J (q - q_prev).
     const Points* tip_steps = nullptr;
     /// Per finger, servo_normal_gain() at its contact [1/m^2] (joint_servo.hpp); null or 0:
     /// the joint servo is not seen (as with ForceLayerParams::servo_stiffness 0).
@@ -107,6 +106,7 @@ class ForceLayer {
     Scalar min_force = Scalar(0);
     Scalar max_force = std::numeric_limits<Scalar>::infinity();
     bool object_free = true;
+    Scalar release_grip = Scalar(0);  ///< s on release: the grasp's s_g; 0: params'
     Scalar dt = Scalar(1e-3);
   };
 
@@ -240,7 +240,8 @@ class ForceLayer {
     Scalar s_lo = Scalar(1), s_hi = std::numeric_limits<Scalar>::infinity();
     bool infeasible = false;
     if (in.object_free) {
-      if (!was_free_) grip_slip_ = std::max(grip_slip_, p.release_grip);
+      const Scalar s_release = in.release_grip > Scalar(0) ? in.release_grip : p.release_grip;
+      if (!was_free_) grip_slip_ = std::max(grip_slip_, s_release);
       for (int i = 0; i < n_; ++i) {
         if (!(*in.touching)(i)) continue;
         const Scalar q = q_int_(i), r = r_load_(i);

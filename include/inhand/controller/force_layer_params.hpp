@@ -27,6 +27,7 @@ struct ForceLayerParams {
   Scalar friction_margin = Scalar(1.5);        ///< >= 1, grip after a slip onset / grip at onset
   Scalar grip_decay_time = Scalar(20);         ///< [s], s_slip back to 1 once the slip stops
   Scalar release_grip = Scalar(2);             ///< >= 1, s when the object is released (decays)
+  Scalar release_load = Scalar(4);             ///< [N], load the release grip is sized for
   Scalar rigid_tolerance = Scalar(0.1);        ///< eps, dimensionless (see the file comment)
   Scalar contact_damping = Scalar(10);         ///< c [N s/m], largest expected; 0: no gain cap
   Scalar capacity_time = Scalar(0.02);  ///< [s], slip at the grip's cap before beyond_capacity
@@ -59,6 +60,7 @@ struct ForceLayerParams {
         {"force_layer.friction_margin", friction_margin, Scalar(1), inf, false},
         {"force_layer.grip_decay_time", grip_decay_time, Scalar(0), inf, true},
         {"force_layer.release_grip", release_grip, Scalar(1), inf, false},
+        {"force_layer.release_load", release_load, Scalar(0), inf, false},
         {"force_layer.rigid_tolerance", rigid_tolerance, Scalar(0), inf, true},
         {"force_layer.contact_damping", contact_damping, Scalar(0), inf, false},
         {"force_layer.capacity_time", capacity_time, Scalar(0), inf, false},

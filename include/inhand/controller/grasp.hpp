@@ -25,10 +25,13 @@
 // contacts are where they were asked for. (Equal forces on three fingers against a
 // thumb would push the object into the thumb with twice the nominal force at release.)
 // n_t is fixed, so q_g is planned once, by start_grasp, free of sensor noise.
-// A placed finger presses with its grasp force f_g = s_g q_g, s_g = release_grip
-// (force_layer_params.hpp) or less if some f_g would exceed max_force (one scale for all,
-// so the pattern stays balanced): the grip the force layer holds the object with on its
-// first free tick is then already there when the object is released. A load the held
+// A placed finger presses with its grasp force f_g = s_g q_g (release_grip_scale below:
+// at least release_grip, more where the grasp's geometry needs it to take release_load,
+// less if some f_g would exceed max_force; one scale for all, so the pattern stays
+// balanced): the grip the force layer holds the object with on its first free tick is
+// then already there when the object is released. s_g is sized over the expected normals
+// n_t by start_grasp, and again over the measured normals on the first tick every finger
+// is placed (it is only raised then). A load the held
 // object hid (its weight, say) arrives at release as a step, faster than any force
 // loop can answer -- a 400 g object released towards the thumb of a 33 kN/m grasp
 // opened the fingers' contacts (30 um of compression at 1 N) within 3 ms -- so only
@@ -52,12 +55,26 @@
 // During manipulation a finger that loses contact re-approaches along its last
 // measured normal, aiming at its last contact point carried rigidly with the measured
 // object pose, and is reported as `reacquiring` until it touches again.
-// Units: m, m/s, s; all points and normals in the world frame.
+// Release grip. Released, the object's load w [N] (its weight, say) arrives as a step
+// and is first carried by the contacts' compression: a translation d of the object
+// presses it by n_i^T d into finger i (n_i outward), which with equal contact stiffness
+// k changes the finger's normal force by k n_i^T d; balancing w (sum_i k n_i n_i^T d = w)
+// gives d = (k G)^-1 w, G = sum_i n_i n_i^T + eps I, so finger i's force changes by
+// n_i^T G^-1 w: it loses up to |w| |G^-1 n_i| [N] (w along -G^-1 n_i). eps =
+// rigid_tolerance: a direction the normals barely span (eigenvalue of sum n n^T below
+// eps) is carried by friction, as in the force layer's split (force_layer.hpp). Finger i
+// keeps min_force under any load up to release_load when
+// s q_i >= min_force + release_load |G^-1 n_i|. k cancels: the sizing is the same from
+// soft to stiff contacts. A load beyond the capped grip is met by the force layer's slip
+// and capacity flags. Not covered: the load's moment about the contacts (the object
+// turning on them), and friction's share, which the normals' geometry does not give.
+// Units: m, m/s, s, N; all points and normals in the world frame.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 
+#include "inhand/controller/force_layer_params.hpp"
 #include "inhand/math/status.hpp"
 #include "inhand/math/types.hpp"
 
@@ -145,6 +162,31 @@ struct GraspTarget {
 /// expected outward normal n: saturated P term plus creep along -n. Once p_v is past
 /// p_t (on the -n side) the P term keeps only its tangential part, so the finger
 /// goes on creeping inwards at creep_speed until contact is sensed.
+/// The grip scale s_g of the grasp (file comment, "Release grip"): for normals (Dim x n,
+/// the object's outward unit normals, world) and the pattern q (n, N), the largest of
+/// `release_grip` and (min_force + release_load |G^-1 n_i|) / q_i over the fingers with
+/// q_i > 0, then lowered until no s_g q_i exceeds max_force. Dimensionless, >= 0.
+/// noexcept, no allocation (a Dim x Dim inverse).
+template <typename Scalar, typename DerivedN, typename DerivedQ>
+inline Scalar release_grip_scale(const Eigen::MatrixBase<DerivedN>& normals,
+                                 const Eigen::MatrixBase<DerivedQ>& pattern,
+                                 const ForceLayerParams<Scalar>& fl, Scalar min_force,
+                                 Scalar max_force) noexcept {
+  constexpr int Dim = DerivedN::RowsAtCompileTime;
+  using Mat = Eigen::Matrix<Scalar, Dim, Dim>;
+  const int n = static_cast<int>(pattern.size());
+  Mat G = fl.rigid_tolerance * Mat::Identity();
+  for (int i = 0; i < n; ++i) G.noalias() += normals.col(i) * normals.col(i).transpose();
+  const Mat G_inv = G.inverse();
+  Scalar s = fl.release_grip;
+  for (int i = 0; i < n; ++i)
+    if (pattern(i) > Scalar(0))
+      s = std::max(s, (min_force + fl.release_load * (G_inv * normals.col(i)).norm()) / pattern(i));
+  for (int i = 0; i < n; ++i)
+    if (s * pattern(i) > max_force) s = max_force / pattern(i);
+  return s;
+}
+
 template <typename Scalar, int Dim>
 inline Vector<Scalar, Dim> approach_velocity(const GraspParams<Scalar>& g,
                                              const Vector<Scalar, Dim>& p_v,
