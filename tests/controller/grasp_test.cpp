@@ -129,10 +129,14 @@ void check_release_grip_scale(std::uint64_t seed) {
     fl.rigid_tolerance = 0.01 + 0.3 * unit(rng);
     const double min_force = 0.5 * unit(rng);
     const double max_force = k % 4 == 0 ? 3.0 : 1e3;  // a quarter of the cases with a low cap
-    const double s = inhand::release_grip_scale(N, q, fl, min_force, max_force);
+    const inhand::ReleaseGrip<double> rg =
+        inhand::release_grip_scale(N, q, fl, min_force, max_force);
+    const double s = rg.scale;
     ASSERT_TRUE(std::isfinite(s));
     for (int i = 0; i < n; ++i) ASSERT_LE(s * q(i), max_force * (1 + 1e-12));
+    // Capped exactly when the cap is what binds (one finger at max_force, below the asked s).
     const bool cap = std::abs(s * q.maxCoeff() - max_force) <= 1e-12 * max_force;
+    EXPECT_EQ(rg.capped, cap && s * q.maxCoeff() < max_force * (1 + 1e-12)) << "case " << k;
     capped += cap ? 1 : 0;
     if (cap) continue;
     EXPECT_GE(s, fl.release_grip);
@@ -182,12 +186,14 @@ TEST(ReleaseGripScale, OpposedPairAndNoLoad) {
   fl.release_grip = 2.0;
   fl.release_load = 4.0;
   fl.rigid_tolerance = 0.1;
-  EXPECT_NEAR(inhand::release_grip_scale(N, q, fl, 0.2, 6.0), 0.2 + 4.0 / 2.1, 1e-12);
+  EXPECT_NEAR(inhand::release_grip_scale(N, q, fl, 0.2, 6.0).scale, 0.2 + 4.0 / 2.1, 1e-12);
+  EXPECT_FALSE(inhand::release_grip_scale(N, q, fl, 0.2, 6.0).capped);
   fl.release_load = 0.0;
-  EXPECT_DOUBLE_EQ(inhand::release_grip_scale(N, q, fl, 0.2, 6.0), 2.0);
-  // The cap: max_force 1.5 N with q = 1 N allows s = 1.5 only.
+  EXPECT_DOUBLE_EQ(inhand::release_grip_scale(N, q, fl, 0.2, 6.0).scale, 2.0);
+  // The cap: max_force 1.5 N with q = 1 N allows s = 1.5 only, and says so.
   fl.release_load = 4.0;
-  EXPECT_DOUBLE_EQ(inhand::release_grip_scale(N, q, fl, 0.2, 1.5), 1.5);
+  EXPECT_DOUBLE_EQ(inhand::release_grip_scale(N, q, fl, 0.2, 1.5).scale, 1.5);
+  EXPECT_TRUE(inhand::release_grip_scale(N, q, fl, 0.2, 1.5).capped);
 }
 
 TEST(GraspParams, ValidationNamesTheField) {

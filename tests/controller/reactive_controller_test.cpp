@@ -890,6 +890,40 @@ TEST(ReactiveControllerGrasp, GraspForcesAreSizedForTheReleaseLoad) {
   EXPECT_NEAR(c.grasp_force(1), 2.0 * pattern_finger, 1e-9);
 }
 
+TEST(ReactiveControllerGrasp, ACappedReleaseGripIsWarnedOnEveryGraspTick) {
+  // The mixed hand's thumb pattern is 2 N: release_grip 2 asks it for 4 N. With max_force
+  // 3.5 N the grip is held at 1.75 and every grasp tick says release_grip_capped, before the
+  // object is released; with the default 6 N it is never raised. Checked on the grasp run to
+  // completion, through the re-sizing over the measured normals.
+  for (const double max_force : {3.5, 6.0}) {
+    Scene<MixedCtrl> s = mixed_scene();
+    s.config.force_layer.release_grip = 2.0;
+    s.config.force_layer.release_load = 0.0;
+    s.config.force_planner.max_force = max_force;
+    MixedCtrl c;
+    MixedCtrl::Input in;
+    MixedCtrl::Output out;
+    ASSERT_TRUE(c.configure(s.config).ok());
+    in = c.make_input();
+    out = c.make_output();
+    ASSERT_TRUE(c.start_grasp(s.targets).ok());
+    int ticks = 0, warned = 0;
+    for (; ticks < 4000; ++ticks) {
+      const ControllerStatus st = tick(c, s.plant, in, out);
+      warned += has(out.warnings, ControllerWarning::release_grip_capped) ? 1 : 0;
+      if (st == ControllerStatus::grasped) break;
+    }
+    ASSERT_LT(ticks, 4000) << "max_force " << max_force;
+    if (max_force < 4.0) {
+      EXPECT_EQ(warned, ticks + 1);
+      EXPECT_NEAR(c.grasp_force(0), max_force, 1e-9);
+    } else {
+      EXPECT_EQ(warned, 0);
+      EXPECT_NEAR(c.grasp_force(0), grasp_forces(s)(0), 1e-12);  // 2 q_g, about 4 N
+    }
+  }
+}
+
 TEST(ReactiveControllerGrasp, GraspForcesAreOneScaleOfThePatternWithinMaxForce) {
   // The thumb's pattern is 2 N against two fingers of 1 N. release_grip 3 would ask the
   // thumb for 6 N; with max_force 5 every finger is scaled by 2.5 instead, so the grasp

@@ -116,11 +116,10 @@ FingerPoints<Types> finger_points(const TickInput<Types>& t, int i, TickScratch<
 
 }  // namespace detail
 
-/// Start of the grasp phase towards `targets` (validated): each finger's target, its
-/// grasp pattern q_g -- the planner's pattern over the targets' expected normals, every
-/// finger counted as touching (grasp.hpp); planned once, which also primes the planner's
-/// filter with it -- its grasp force f_g = s_g q_g (s_g: release_grip_scale() over the
-/// targets' normals, grasp.hpp; one scale keeps the pattern's balance), fresh memory.
+/// Start of the grasp towards `targets` (validated): each finger's target, its pattern q_g
+/// (the planner's over the targets' normals, all touching, grasp.hpp; planned once, which
+/// primes the planner's filter), grasp force f_g = s_g q_g (s_g: release_grip_scale() over
+/// the targets' normals; one scale keeps the pattern's balance), fresh memory.
 template <typename Types, typename Targets>
 void begin_grasp(const typename Types::Config& config, const Targets& targets,
                  ControllerState<Types>& st, TickScratch<Types>& sc) noexcept {
@@ -132,16 +131,17 @@ void begin_grasp(const typename Types::Config& config, const Targets& targets,
   typename Types::Vec residual;
   st.planner.reset();
   st.planner.plan(sc.touching, sc.normals, config.control_period, sc.pattern, residual);
-  const auto scale = st.grasp_grip =
-      release_grip_scale(sc.normals.leftCols(n), sc.pattern.head(n), config.force_layer,
-                         config.force_planner.min_force, config.force_planner.max_force);
+  const auto r = release_grip_scale(sc.normals.leftCols(n), sc.pattern.head(n), config.force_layer,
+                                    config.force_planner.min_force, config.force_planner.max_force);
+  st.grasp_grip = r.scale;
+  st.grasp_grip_capped = r.capped;
   st.grasp_grip_measured = false;
   for (int i = 0; i < n; ++i) {
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     m.target = targets[static_cast<std::size_t>(i)];
     m.target.normal.normalize();
     m.grasp_pattern = sc.pattern(i);
-    m.grasp_force = scale * sc.pattern(i);
+    m.grasp_force = r.scale * sc.pattern(i);
     m.state = FingerState::approaching;
     m.touched = false;
     m.layer3.servo.reset();
@@ -156,7 +156,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
   using Scalar = typename Types::ScalarType;
   const GraspParams<Scalar>& g = t.config.grasp;
   ControllerWarning w = out.warnings;
-  detail::size_grip_on_measured_normals(t.config, t.in, st, sc);
+  w |= detail::size_grip_on_measured_normals(t.config, t.in, st, sc);
   // A placed finger presses with its grasp force f_g, a finger not yet placed slides to
   // its target with slide_force_fraction of its pattern q_g (both set by start_grasp).
   for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {

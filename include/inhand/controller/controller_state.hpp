@@ -65,6 +65,7 @@ struct ControllerState {
   Scalar risk_hold = Scalar(0);          ///< s the at-risk cut stays on (Config::at_risk_hold)
   Scalar grasp_grip = Scalar(0);         ///< s_g of the grasp (grasp.hpp); 0: none begun
   bool grasp_grip_measured = false;      ///< s_g sized over the measured normals yet
+  bool grasp_grip_capped = false;        ///< max_force lowered s_g (release_grip_scale)
   PoseLoop<Scalar, Dim> pose_loop{};
   PoseGate<Scalar, Dim> pose_gate{};
 
@@ -168,30 +169,38 @@ namespace detail {
 /// On the first grasp tick every finger is placed and touching, s_g is sized again over
 /// the measured normals and raised to that if higher: the grasp then presses with
 /// f_g = s_g q_g of the contacts it has (grasp.hpp). Uses sc.normals and sc.pattern as
-/// its workspace (the grasp phase writes both after it on every tick).
+/// its workspace (the grasp phase writes both after it on every tick). Returns
+/// release_grip_capped while the last sizing was capped by max_force, else none.
 template <typename Types>
-void size_grip_on_measured_normals(const typename Types::Config& config,
-                                   const typename Types::Input& in, ControllerState<Types>& st,
-                                   TickScratch<Types>& sc) noexcept {
-  if (st.grasp_grip_measured) return;
+ControllerWarning size_grip_on_measured_normals(const typename Types::Config& config,
+                                                const typename Types::Input& in,
+                                                ControllerState<Types>& st,
+                                                TickScratch<Types>& sc) noexcept {
+  const ControllerWarning none = ControllerWarning::none;
   const int n = static_cast<int>(st.fingers.size());
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < n && !st.grasp_grip_measured; ++i) {
     const FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     const typename Types::FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
-    if (!f.contact.touching || !m.settle.placed) return;
+    if (!f.contact.touching || !m.settle.placed)
+      return st.grasp_grip_capped ? ControllerWarning::release_grip_capped : none;
     sc.normals.col(i) = f.contact.normal.normalized();
     sc.pattern(i) = m.grasp_pattern;
   }
-  const typename Types::ScalarType s =
-      release_grip_scale(sc.normals.leftCols(n), sc.pattern.head(n), config.force_layer,
-                         config.force_planner.min_force, config.force_planner.max_force);
-  st.grasp_grip_measured = true;
-  if (!(s > st.grasp_grip)) return;
-  st.grasp_grip = s;
-  for (int i = 0; i < n; ++i) {
-    FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
-    m.grasp_force = s * m.grasp_pattern;
+  if (!st.grasp_grip_measured) {
+    const auto r =
+        release_grip_scale(sc.normals.leftCols(n), sc.pattern.head(n), config.force_layer,
+                           config.force_planner.min_force, config.force_planner.max_force);
+    st.grasp_grip_measured = true;
+    st.grasp_grip_capped = r.capped;
+    if (r.scale > st.grasp_grip) {
+      st.grasp_grip = r.scale;
+      for (int i = 0; i < n; ++i) {
+        FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+        m.grasp_force = r.scale * m.grasp_pattern;
+      }
+    }
   }
+  return st.grasp_grip_capped ? ControllerWarning::release_grip_capped : none;
 }
 }  // namespace detail
 

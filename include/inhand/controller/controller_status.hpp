@@ -115,6 +115,10 @@ enum class ControllerWarning : unsigned {
   /// with workspace_limited: the commanded twist was cut there this tick, so the object
   /// does not follow the trajectory's twist (Config::keep_twist_in_reach, at_risk_hold)
   workspace_cut = 1u << 18,
+  /// grasp phase: max_force holds the grasp's grip s_g below what release_grip and
+  /// release_load ask (grasp.hpp "Release grip"): released, a load of release_load along
+  /// some direction may open a contact
+  release_grip_capped = 1u << 19,
 };
 template <>
 struct is_flags<ControllerWarning> : std::true_type {};

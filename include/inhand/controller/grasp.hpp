@@ -158,35 +158,49 @@ struct GraspTarget {
   }
 };
 
-/// Approach velocity of a virtual contact point p_v towards target p_t with the
-/// expected outward normal n: saturated P term plus creep along -n. Once p_v is past
-/// p_t (on the -n side) the P term keeps only its tangential part, so the finger
-/// goes on creeping inwards at creep_speed until contact is sensed.
+/// The grasp's grip scale s_g and whether max_force lowered it (release_grip_scale).
+template <typename Scalar>
+struct ReleaseGrip {
+  Scalar scale = Scalar(1);  ///< s_g, dimensionless
+  bool capped = false;       ///< s_g is below what release_grip / release_load ask
+};
+
 /// The grip scale s_g of the grasp (file comment, "Release grip"): for normals (Dim x n,
 /// the object's outward unit normals, world) and the pattern q (n, N), the largest of
 /// `release_grip` and (min_force + release_load |G^-1 n_i|) / q_i over the fingers with
-/// q_i > 0, then lowered until no s_g q_i exceeds max_force. Dimensionless, >= 0.
+/// q_i > 0, then lowered until no s_g q_i exceeds max_force (`capped`: a load of
+/// release_load may then take some finger below min_force, or release_grip is not met).
 /// noexcept, no allocation (a Dim x Dim inverse).
 template <typename Scalar, typename DerivedN, typename DerivedQ>
-inline Scalar release_grip_scale(const Eigen::MatrixBase<DerivedN>& normals,
-                                 const Eigen::MatrixBase<DerivedQ>& pattern,
-                                 const ForceLayerParams<Scalar>& fl, Scalar min_force,
-                                 Scalar max_force) noexcept {
+inline ReleaseGrip<Scalar> release_grip_scale(const Eigen::MatrixBase<DerivedN>& normals,
+                                              const Eigen::MatrixBase<DerivedQ>& pattern,
+                                              const ForceLayerParams<Scalar>& fl, Scalar min_force,
+                                              Scalar max_force) noexcept {
   constexpr int Dim = DerivedN::RowsAtCompileTime;
   using Mat = Eigen::Matrix<Scalar, Dim, Dim>;
   const int n = static_cast<int>(pattern.size());
   Mat G = fl.rigid_tolerance * Mat::Identity();
   for (int i = 0; i < n; ++i) G.noalias() += normals.col(i) * normals.col(i).transpose();
   const Mat G_inv = G.inverse();
-  Scalar s = fl.release_grip;
+  ReleaseGrip<Scalar> r;
+  r.scale = fl.release_grip;
   for (int i = 0; i < n; ++i)
     if (pattern(i) > Scalar(0))
-      s = std::max(s, (min_force + fl.release_load * (G_inv * normals.col(i)).norm()) / pattern(i));
-  for (int i = 0; i < n; ++i)
-    if (s * pattern(i) > max_force) s = max_force / pattern(i);
-  return s;
+      r.scale = std::max(
+          r.scale, (min_force + fl.release_load * (G_inv * normals.col(i)).norm()) / pattern(i));
+  for (int i = 0; i < n; ++i) {
+    if (r.scale * pattern(i) > max_force) {
+      r.scale = max_force / pattern(i);
+      r.capped = true;
+    }
+  }
+  return r;
 }
 
+/// Approach velocity of a virtual contact point p_v towards target p_t with the
+/// expected outward normal n: saturated P term plus creep along -n. Once p_v is past
+/// p_t (on the -n side) the P term keeps only its tangential part, so the finger
+/// goes on creeping inwards at creep_speed until contact is sensed.
 template <typename Scalar, int Dim>
 inline Vector<Scalar, Dim> approach_velocity(const GraspParams<Scalar>& g,
                                              const Vector<Scalar, Dim>& p_v,
