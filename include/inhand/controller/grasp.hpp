@@ -65,8 +65,9 @@
 // eps) is carried by friction, as in the force layer's split (force_layer.hpp). Finger i
 // keeps min_force under any load up to release_load when
 // s q_i >= min_force + release_load |G^-1 n_i|. k cancels: the sizing is the same from
-// soft to stiff contacts. A load beyond the capped grip is met by the force layer's slip
-// and capacity flags. Not covered: the load's moment about the contacts (the object
+// soft to stiff contacts. A grip capped by max_force is warned during the grasp
+// (release_grip_capped); the load beyond it meets the force layer's slip and capacity
+// flags. Not covered: the load's moment about the contacts (the object
 // turning on them), and friction's share, which the normals' geometry does not give.
 // Units: m, m/s, s, N; all points and normals in the world frame.
 #pragma once
