@@ -60,7 +60,11 @@ struct Case {
 /// 0.02-0.4 kg, friction 0.4-1.2, gravity along one of +-X, +-Y, +-Z of the hand,
 /// contact stiffness 500 N/m-50 kN/m (log-uniform), joint-velocity lag 0-10 ms and
 /// 0 or 1 command of delay, and a force bias of +-10 % of the nominal grip on one
-/// finger from release to the end.
+/// finger from release to the end. The drawn stiffness is the pad's, in both directions:
+/// the tangential (bristle) stiffness keeps the plant default's ratio to the normal one
+/// (ContactParams: 2000 / 2000 N/m, so equal), as a softer or stiffer pad is so in shear
+/// too. Shear::fixed keeps it at the plant default (2 kN/m) whatever the normal stiffness:
+/// the draw before that rule, which the regression cases found with it replay.
 struct Wide {
   double mass[2] = {0.02, 0.40};
   double friction[2] = {0.4, 1.2};
@@ -69,7 +73,10 @@ struct Wide {
   double bias = 0.1;  // N, +-
 };
 
-inline Case make_case(std::uint64_t seed, bool wide = false) {
+/// How the wide draw sets the contact's tangential stiffness (see Wide).
+enum class Shear { scaled, fixed };
+
+inline Case make_case(std::uint64_t seed, bool wide = false, Shear shear = Shear::scaled) {
   const Ranges R{};
   const Wide W{};
   std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 1);
@@ -138,6 +145,12 @@ inline Case make_case(std::uint64_t seed, bool wide = false) {
     const int g = std::uniform_int_distribution<int>(0, 5)(rng);
     s.plant.gravity = 9.81 * dirs[g];
     s.plant.contact.normal_stiffness = std::pow(10.0, draw(rng, W.log10_stiffness));
+    if (shear == Shear::scaled) {  // no draw: the other draws stay as they were
+      const ip::ContactParams nominal{};
+      s.plant.contact.tangential_stiffness = s.plant.contact.normal_stiffness *
+                                             nominal.tangential_stiffness /
+                                             nominal.normal_stiffness;
+    }
     s.plant.joint_velocity_lag = draw(rng, W.lag);
     s.plant.command_delay = std::uniform_int_distribution<int>(0, 1)(rng);
     const int n = static_cast<int>(s.hand.fingers.size());
@@ -152,8 +165,9 @@ inline Case make_case(std::uint64_t seed, bool wide = false) {
       s.faults.push_back(bias);
     }
     std::snprintf(wide_desc, sizeof wide_desc,
-                  " g=%s%c k=%.0fN/m lag=%.1fms delay=%d bias=%+.1fN@%d", g % 2 == 0 ? "+" : "-",
-                  "XYZ"[g / 2], s.plant.contact.normal_stiffness, 1e3 * s.plant.joint_velocity_lag,
+                  " g=%s%c k=%.0f/%.0fN/m lag=%.1fms delay=%d bias=%+.1fN@%d",
+                  g % 2 == 0 ? "+" : "-", "XYZ"[g / 2], s.plant.contact.normal_stiffness,
+                  s.plant.contact.tangential_stiffness, 1e3 * s.plant.joint_velocity_lag,
                   s.plant.command_delay, bias.magnitude, bias.finger);
   }
   char desc[512];

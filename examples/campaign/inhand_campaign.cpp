@@ -104,7 +104,13 @@ int main(int argc, char** argv) {
   app.add_flag(
       "--wide", wide,
       "widened ranges: mass 0.02-0.4 kg, friction 0.4-1.2, gravity along +-X/Y/Z, stiffness "
-      "500 N/m-50 kN/m, lag 0-10 ms, delay 0-1 tick, +-0.1 N bias on one finger");
+      "500 N/m-50 kN/m (normal and, in the same ratio as the plant default, tangential), lag "
+      "0-10 ms, delay 0-1 tick, +-0.1 N bias on one finger");
+  bool fixed_shear = false;
+  app.add_flag("--fixed-shear-stiffness", fixed_shear,
+               "with --wide: the contact's tangential stiffness stays at the plant default "
+               "(2 kN/m) whatever the drawn normal stiffness (by default it scales with it); "
+               "the wide draw the earlier regression cases were found with");
   bool keep_in_reach = false;
   app.add_flag("--keep-twist-in-reach", keep_in_reach,
                "controller Config::keep_twist_in_reach: cut the object twist where a joint held "
@@ -134,7 +140,9 @@ int main(int argc, char** argv) {
   std::vector<std::uint64_t> failing;
   for (long k = 0; k < count; ++k) {
     const std::uint64_t seed = first + static_cast<std::uint64_t>(k);
-    Case c = make_case(seed, wide);
+    Case c = make_case(seed, wide,
+                       fixed_shear ? inhand::examples::campaign::Shear::fixed
+                                   : inhand::examples::campaign::Shear::scaled);
     c.spec.controller.keep_twist_in_reach = keep_in_reach;
     c.spec.controller.at_risk_hold = at_risk_hold;
     c.spec.controller.force_layer.release_load = release_load;

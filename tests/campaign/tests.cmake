@@ -5,13 +5,21 @@ if(INHAND_HAVE_CAMPAIGN)
   add_test(NAME campaign.slice_seeds_0_19
            COMMAND inhand_campaign --first-seed 0 --count 20 --min-success 0.99)
   set_tests_properties(campaign.slice_seeds_0_19 PROPERTIES LABELS campaign TIMEOUT 300)
+  # The wide ranges' first 200 seeds at their measured rate less a margin: 199 of 200 pass
+  # (seed 7, a 349 g cylinder squeezed out along gravity, fails); at most 4 may fail.
+  add_test(NAME campaign.wide_slice_seeds_0_199
+           COMMAND inhand_campaign --wide --first-seed 0 --count 200 --min-success 0.98)
+  set_tests_properties(campaign.wide_slice_seeds_0_199 PROPERTIES LABELS campaign TIMEOUT 300)
+  # The regression cases below were found with the wide draw whose tangential stiffness
+  # stayed at the plant default (2 kN/m) whatever the normal one; --fixed-shear-stiffness
+  # replays them as they were found.
   # Wide-range cases whose grasp timed out before a pressing finger's contact normal had
   # priority in the IK at its joint limits (the thumb of seed 301 pressed 6.3 N against a
   # 0.6 N target, seed 988's did not settle; both spheres with +0.1 N of force bias).
   add_test(NAME campaign.wide_grasp_at_a_joint_limit
-           COMMAND inhand_campaign --wide --first-seed 301 --count 1 --min-success 1)
+           COMMAND inhand_campaign --wide --fixed-shear-stiffness --first-seed 301 --count 1 --min-success 1)
   add_test(NAME campaign.wide_grasp_at_a_joint_limit_988
-           COMMAND inhand_campaign --wide --first-seed 988 --count 1 --min-success 1)
+           COMMAND inhand_campaign --wide --fixed-shear-stiffness --first-seed 988 --count 1 --min-success 1)
   set_tests_properties(campaign.wide_grasp_at_a_joint_limit campaign.wide_grasp_at_a_joint_limit_988
                        PROPERTIES LABELS campaign TIMEOUT 120)
   # Wide-range cases whose grasp timed out in a force cycle: two fingers of each (behind
@@ -20,7 +28,7 @@ if(INHAND_HAVE_CAMPAIGN)
   # to 2.3 N (controller/grasp.hpp: a finger that has touched now comes back at creep speed).
   foreach(seed 382 743)
     add_test(NAME campaign.wide_grasp_force_cycle_${seed}
-             COMMAND inhand_campaign --wide --first-seed ${seed} --count 1 --min-success 1)
+             COMMAND inhand_campaign --wide --fixed-shear-stiffness --first-seed ${seed} --count 1 --min-success 1)
     set_tests_properties(campaign.wide_grasp_force_cycle_${seed} PROPERTIES LABELS campaign TIMEOUT 120)
   endforeach()
   # Wide-range cases whose thumb reaches a joint limit during the task: the other fingers
@@ -29,7 +37,7 @@ if(INHAND_HAVE_CAMPAIGN)
   # comes back with the reciprocating task, within the campaign's bounds.
   foreach(seed 481 550)
     add_test(NAME campaign.wide_thumb_at_a_limit_kept_in_reach_${seed}
-             COMMAND inhand_campaign --wide --first-seed ${seed} --count 1 --min-success 1
+             COMMAND inhand_campaign --wide --fixed-shear-stiffness --first-seed ${seed} --count 1 --min-success 1
                      --keep-twist-in-reach)
     set_tests_properties(campaign.wide_thumb_at_a_limit_kept_in_reach_${seed}
                          PROPERTIES LABELS campaign TIMEOUT 120)
@@ -42,7 +50,7 @@ if(INHAND_HAVE_CAMPAIGN)
   add_test(NAME campaign.thumb_at_a_limit_grasp_at_risk_1620
            COMMAND inhand_campaign --first-seed 1620 --count 1 --min-success 1)
   add_test(NAME campaign.wide_thumb_at_a_limit_grasp_at_risk_550
-           COMMAND inhand_campaign --wide --first-seed 550 --count 1 --min-success 1)
+           COMMAND inhand_campaign --wide --fixed-shear-stiffness --first-seed 550 --count 1 --min-success 1)
   set_tests_properties(campaign.thumb_at_a_limit_grasp_at_risk_1620
                        campaign.wide_thumb_at_a_limit_grasp_at_risk_550
                        PROPERTIES LABELS campaign TIMEOUT 120)
@@ -53,7 +61,7 @@ if(INHAND_HAVE_CAMPAIGN)
   # (controller/grasp.hpp, "Release grip"); with --release-load 0 each fails again.
   foreach(seed 114 634 792)
     add_test(NAME campaign.wide_release_grip_sized_for_the_load_${seed}
-             COMMAND inhand_campaign --wide --first-seed ${seed} --count 1 --min-success 1)
+             COMMAND inhand_campaign --wide --fixed-shear-stiffness --first-seed ${seed} --count 1 --min-success 1)
     set_tests_properties(campaign.wide_release_grip_sized_for_the_load_${seed}
                          PROPERTIES LABELS campaign TIMEOUT 120)
   endforeach()

@@ -336,4 +336,30 @@ TEST(WorkspaceEdge, ARedundantFingerWithTwoJointsAtTheirLimitsIsFlagged) {
   inhand_test::record("error_at_first_warning_mm", error_at_first_flag * 1e3);
 }
 
+// The wide campaign's drawn contact stiffness is the pad's in both directions: the
+// tangential stiffness keeps the plant default's ratio to the normal one, Shear::fixed
+// keeps the plant default, and the rule draws nothing (every other draw is the same).
+TEST(CampaignCases, TheWideDrawScalesTheShearStiffnessWithTheNormalOne) {
+  namespace cp = inhand::examples::campaign;
+  const ip::ContactParams nominal{};
+  const double ratio = nominal.tangential_stiffness / nominal.normal_stiffness;
+  for (int k = 0; k < inhand_test::scaled(50); ++k) {
+    const auto seed = static_cast<std::uint64_t>(k);
+    const cp::Case scaled = cp::make_case(seed, true);
+    const cp::Case fixed = cp::make_case(seed, true, cp::Shear::fixed);
+    const cp::Case narrow = cp::make_case(seed);
+    const ip::ContactParams& a = scaled.spec.plant.contact;
+    const ip::ContactParams& b = fixed.spec.plant.contact;
+    EXPECT_NEAR(a.tangential_stiffness, ratio * a.normal_stiffness, 1e-9 * a.normal_stiffness);
+    EXPECT_EQ(b.tangential_stiffness, nominal.tangential_stiffness);
+    EXPECT_EQ(a.normal_stiffness, b.normal_stiffness);
+    EXPECT_EQ(a.friction, b.friction);
+    EXPECT_EQ(scaled.spec.object.mass, fixed.spec.object.mass);
+    EXPECT_EQ(scaled.spec.plant.gravity, fixed.spec.plant.gravity);
+    EXPECT_EQ(scaled.spec.plant.joint_velocity_lag, fixed.spec.plant.joint_velocity_lag);
+    EXPECT_EQ(narrow.spec.plant.contact.tangential_stiffness, nominal.tangential_stiffness);
+    EXPECT_EQ(narrow.spec.plant.contact.normal_stiffness, nominal.normal_stiffness);
+  }
+}
+
 }  // namespace
