@@ -8,14 +8,18 @@
 // grasp (object frozen) -> release + hold 1 s -> task -> settle 0.5 s.
 // A case succeeds when the grasp completes, the object is not dropped, no contact is
 // lost, and the task stage meets the campaign bounds (see kBounds).
-// Output: one line per failing case (with its seed) and a summary table; exit code 1
-// when the success rate is below --min-success. `--first-seed S --count 1 --trace F.csv`
+// Output: one line per failing case (with its seed, and which of the warnings that say
+// the object may be lost -- release_grip_capped, beyond_capacity, workspace_limited -- came
+// first, how long before the first contact opened), a summary table, how many failures were
+// so warned and how many successes raised the same warnings; exit code 1 when the success
+// rate is below --min-success. `--first-seed S --count 1 --trace F.csv`
 // writes case S's per-tick trace (the columns of inhand_scenario's trace.csv), to see
 // why a seed fails.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -32,23 +36,84 @@ using inhand::examples::campaign::Case;
 using inhand::examples::campaign::kBounds;
 using inhand::examples::campaign::make_case;
 
+/// The controller's warnings that say the object may be lost (docs/force_layer.md): the
+/// grip at release capped below what release_load asks, the load beyond the grip's cap,
+/// the task asking a held joint for more than it can give.
+struct Foretelling {
+  inhand::ControllerWarning flag;
+  const char* name;
+};
+constexpr Foretelling kForetelling[] = {
+    {inhand::ControllerWarning::release_grip_capped, "release_grip_capped"},
+    {inhand::ControllerWarning::beyond_capacity, "beyond_capacity"},
+    {inhand::ControllerWarning::workspace_limited, "workspace_limited"},
+};
+constexpr int kForetold = static_cast<int>(sizeof kForetelling / sizeof kForetelling[0]);
+
 struct Outcome {
   bool success = false;
   std::string why;
   double rms_p = 0, fin_p = 0, rms_r = 0, fin_r = 0;
+  /// s: the first tick after the grasp on which a sensed contact opened (NaN: none), and
+  /// the first tick that raised each of kForetelling (NaN: never raised).
+  double loss_time = std::numeric_limits<double>::quiet_NaN();
+  double warned_time[kForetold] = {std::numeric_limits<double>::quiet_NaN(),
+                                   std::numeric_limits<double>::quiet_NaN(),
+                                   std::numeric_limits<double>::quiet_NaN()};
 };
+
+/// Watches a run's ticks for Outcome::loss_time and warned_time.
+class LossWatch {
+ public:
+  explicit LossWatch(Outcome& o) : o_(o) {}
+  void tick(const ip::TickRecord& rec) {
+    for (int k = 0; k < kForetold; ++k)
+      if (std::isnan(o_.warned_time[k]) && inhand::has(rec.output->warnings, kForetelling[k].flag))
+        o_.warned_time[k] = rec.time;
+    if (!std::isnan(o_.loss_time)) return;
+    const auto& in = rec.input->fingers;
+    touching_.resize(in.size(), 0);
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      const bool now = in[i].contact.touching;
+      if (rec.stage > 0 && touching_[i] && !now) o_.loss_time = rec.time;
+      touching_[i] = now ? 1 : 0;
+    }
+  }
+
+ private:
+  Outcome& o_;
+  std::vector<char> touching_;
+};
+
+/// "<flag> <ms> ms before the first contact opened" for the earliest warning raised before
+/// that tick, or why there is none.
+std::string foretold(const Outcome& o) {
+  if (std::isnan(o.loss_time)) return "no contact opened";
+  int first = -1;
+  for (int k = 0; k < kForetold; ++k)
+    if (!std::isnan(o.warned_time[k]) && o.warned_time[k] < o.loss_time &&
+        (first < 0 || o.warned_time[k] < o.warned_time[first]))
+      first = k;
+  if (first < 0) return "no warning before the first contact opened";
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%s %.0f ms before the first contact opened",
+                kForetelling[first].name, 1e3 * (o.loss_time - o.warned_time[first]));
+  return buf;
+}
 
 /// Runs a case; with `trace`, writes its per-tick trace there (committed at the end).
 Outcome evaluate(const Case& c, const std::string& trace = {}) {
   Outcome o;
+  LossWatch watch(o);
   ip::ScenarioResult r;
   try {
     if (trace.empty()) {
-      r = ip::ScenarioRunner{}.run(c.spec);
+      r = ip::ScenarioRunner{}.run(c.spec, [&](const ip::TickRecord& rec) { watch.tick(rec); });
     } else {
       ex::TraceCsvWriter<3> writer(trace, c.spec.hand.finger_names, c.spec.object.pose.rotation);
       ex::TraceRow<3> row;
       r = ip::ScenarioRunner{}.run(c.spec, [&](const ip::TickRecord& rec) {
+        watch.tick(rec);
         ex::fill_trace_row<3>(rec, c.spec.stages[static_cast<std::size_t>(rec.stage)].name, row);
         writer.write(row);
       });
@@ -138,6 +203,9 @@ int main(int argc, char** argv) {
   long ok = 0;
   double worst_rms_p = 0, worst_rms_r = 0, sum_rms_p = 0, sum_rms_r = 0;
   std::vector<std::uint64_t> failing;
+  long opened = 0, warned = 0;  // failures in which a contact opened; of them, warned before
+  long warned_by[kForetold] = {};
+  long raised_in_success[kForetold] = {};  // successes that raised the flag at some tick
   for (long k = 0; k < count; ++k) {
     const std::uint64_t seed = first + static_cast<std::uint64_t>(k);
     Case c = make_case(seed, wide,
@@ -153,14 +221,26 @@ int main(int argc, char** argv) {
       worst_rms_r = std::max(worst_rms_r, o.rms_r);
       sum_rms_p += o.rms_p;
       sum_rms_r += o.rms_r;
+      for (int j = 0; j < kForetold; ++j)
+        raised_in_success[j] += std::isnan(o.warned_time[j]) ? 0 : 1;
     } else {
       failing.push_back(seed);
+      if (!std::isnan(o.loss_time)) {
+        ++opened;
+        bool any = false;
+        for (int j = 0; j < kForetold; ++j)
+          if (!std::isnan(o.warned_time[j]) && o.warned_time[j] < o.loss_time) {
+            ++warned_by[j];
+            any = true;
+          }
+        warned += any ? 1 : 0;
+      }
     }
     if (verbose || !o.success)
-      std::printf("seed %6llu %-4s %-70s rms %.3fmm/%.4frad final %.3fmm/%.4frad %s\n",
+      std::printf("seed %6llu %-4s %-70s rms %.3fmm/%.4frad final %.3fmm/%.4frad %s%s%s\n",
                   static_cast<unsigned long long>(seed), o.success ? "ok" : "FAIL",
                   c.description.c_str(), 1e3 * o.rms_p, o.rms_r, 1e3 * o.fin_p, o.fin_r,
-                  o.why.c_str());
+                  o.why.c_str(), o.success ? "" : "; ", o.success ? "" : foretold(o).c_str());
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -174,5 +254,13 @@ int main(int argc, char** argv) {
   std::printf("failing seeds:");
   for (auto s : failing) std::printf(" %llu", static_cast<unsigned long long>(s));
   std::printf("%s\n", failing.empty() ? " none" : "");
+  std::printf("failures in which a contact opened: %ld; warned before it opened: %ld (", opened,
+              warned);
+  for (int k = 0; k < kForetold; ++k)
+    std::printf("%s%s %ld", k ? ", " : "", kForetelling[k].name, warned_by[k]);
+  std::printf("); successes that raised them: ");
+  for (int k = 0; k < kForetold; ++k)
+    std::printf("%s%s %ld", k ? ", " : "", kForetelling[k].name, raised_in_success[k]);
+  std::printf("\n");
   return rate >= min_success ? 0 : 1;
 }
