@@ -57,9 +57,10 @@ struct Outcome {
   /// s: the first tick after the grasp on which a sensed contact opened (NaN: none), and
   /// the first tick that raised each of kForetelling (NaN: never raised).
   double loss_time = std::numeric_limits<double>::quiet_NaN();
-  double warned_time[kForetold] = {std::numeric_limits<double>::quiet_NaN(),
-                                   std::numeric_limits<double>::quiet_NaN(),
-                                   std::numeric_limits<double>::quiet_NaN()};
+  double warned_time[kForetold];
+  Outcome() {
+    for (double& t : warned_time) t = std::numeric_limits<double>::quiet_NaN();
+  }
 };
 
 /// Watches a run's ticks for Outcome::loss_time and warned_time.
