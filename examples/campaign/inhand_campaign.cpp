@@ -61,6 +61,8 @@ struct Outcome {
   Outcome() {
     for (double& t : warned_time) t = std::numeric_limits<double>::quiet_NaN();
   }
+  /// Whether kForetelling[k] was raised on a tick before the first contact opened.
+  bool warned_before_loss(int k) const { return warned_time[k] < loss_time; }  // NaN: false
 };
 
 /// Watches a run's ticks for Outcome::loss_time and warned_time.
@@ -92,8 +94,7 @@ std::string foretold(const Outcome& o) {
   if (std::isnan(o.loss_time)) return "no contact opened";
   int first = -1;
   for (int k = 0; k < kForetold; ++k)
-    if (!std::isnan(o.warned_time[k]) && o.warned_time[k] < o.loss_time &&
-        (first < 0 || o.warned_time[k] < o.warned_time[first]))
+    if (o.warned_before_loss(k) && (first < 0 || o.warned_time[k] < o.warned_time[first]))
       first = k;
   if (first < 0) return "no warning before the first contact opened";
   char buf[160];
@@ -230,7 +231,7 @@ int main(int argc, char** argv) {
         ++opened;
         bool any = false;
         for (int j = 0; j < kForetold; ++j)
-          if (!std::isnan(o.warned_time[j]) && o.warned_time[j] < o.loss_time) {
+          if (o.warned_before_loss(j)) {
             ++warned_by[j];
             any = true;
           }

@@ -12,8 +12,8 @@ if(INHAND_HAVE_CAMPAIGN)
   set_tests_properties(campaign.wide_slice_seeds_0_199 PROPERTIES LABELS campaign TIMEOUT 300)
   # A heavy cylinder that slides out at release (wide seeds 2000: 307 g, and 2115: 244 g, both
   # at friction 0.43, gravity across the fingers' normals, under 1.3 kN/m): beyond the hand
-  # at max_force, so the case fails, but beyond_capacity must come before its first contact
-  # opens (35 and 48 ms before, measured).
+  # at max_force, so the case fails, but beyond_capacity must be the first warning raised
+  # before its first contact opens (35 and 48 ms before, measured).
   foreach(seed 2000 2115)
     add_test(NAME campaign.wide_slide_at_release_is_warned_${seed}
              COMMAND inhand_campaign --wide --first-seed ${seed} --count 1 --min-success 0)
