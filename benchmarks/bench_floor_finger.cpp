@@ -1,6 +1,7 @@
 // One finger's share of a control tick, and the latency floor it is judged against.
 //
-// finger/<case>: forward_kinematics + point_jacobian at the contact point + hybrid
+// finger/<case>: forward_kinematics (with the chain's plan, as the controller) +
+//   point_jacobian at the contact point + hybrid
 //   servo update + ContactIk::solve: everything the controller does per touching
 //   finger (layer 3) apart from the bookkeeping.
 // floor/sincos4: the 4-joint finger's unavoidable transcendental work, the sines and
@@ -101,6 +102,7 @@ class FingerFixture {
 
   FingerFixture(const HandDef<Dim>& hand, int finger, std::uint64_t seed)
       : chain_(convert_chain<Chain, Dim>(hand.fingers[static_cast<std::size_t>(finger)])),
+        plan_(chain_),
         ws_(chain_),
         ik_(chain_.dof()),
         jacobian_(Dim, chain_.dof()) {
@@ -118,7 +120,7 @@ class FingerFixture {
 
   [[gnu::noinline]] S tick() noexcept {
     const std::size_t k = next_++ & (kSamples - 1);
-    inhand::forward_kinematics(chain_, q_[k], ws_);
+    inhand::forward_kinematics(chain_, plan_, q_[k], ws_);
     inhand::point_jacobian(ws_, contact_[k], jacobian_);
     servo_.update(velocity_[k], S(1), force_[k], normal_[k], true, S(kDt), command_);
     const inhand::IkReport<S> r = ik_.solve(jacobian_, command_.total, max_velocity_, theta_dot_);
@@ -127,6 +129,7 @@ class FingerFixture {
 
  private:
   Chain chain_;
+  inhand::ChainPlan<Chain> plan_;
   inhand::FingerKinematics<Chain> ws_;
   Ik ik_;
   inhand::HybridServo<S, Dim> servo_{};

@@ -1,4 +1,5 @@
-// Finger kinematics per tick: forward_kinematics (joint frames and fingertip) followed
+// Finger kinematics per tick: forward_kinematics (joint frames and fingertip, with the
+// chain's plan, as the controller) followed
 // by point_jacobian at the measured contact point, i.e. what the controller computes
 // for one finger before its IK. Cases: planar 2 and 3 joints, spatial 3 (the
 // three-finger hand's finger), 4 (a Shadow-like finger) and 5 (the Shadow-like thumb).
@@ -16,6 +17,7 @@ class KinematicsFixture {
 
   KinematicsFixture(const HandDef<Dim>& hand, int finger, std::uint64_t seed)
       : chain_(convert_chain<Chain, Dim>(hand.fingers[static_cast<std::size_t>(finger)])),
+        plan_(chain_),
         ws_(chain_),
         jacobian_(Dim, chain_.dof()) {
     jacobian_.setZero();
@@ -27,13 +29,14 @@ class KinematicsFixture {
 
   [[gnu::noinline]] S tick() noexcept {
     const std::size_t k = next_++ & (kSamples - 1);
-    inhand::forward_kinematics(chain_, q_[k], ws_);
+    inhand::forward_kinematics(chain_, plan_, q_[k], ws_);
     inhand::point_jacobian(ws_, contact_[k], jacobian_);
     return jacobian_(0, 0);
   }
 
  private:
   Chain chain_;
+  inhand::ChainPlan<Chain> plan_;
   inhand::FingerKinematics<Chain> ws_;
   typename Chain::Jacobian jacobian_;
   std::vector<typename Chain::JointVector> q_;

@@ -1,11 +1,10 @@
-// Proof that the per-tick path of a finger allocates nothing: forward_kinematics,
-// point_jacobian, ContactIk::solve (with and without the null-space term),
-// ContactIk::pseudo_inverse and HybridServo::update, for fixed-size fingers (planar 2
-// and 3 DOF, spatial 3, 4 and 5 DOF) and the run-time bounded finger (Dynamic,
-// MaxDof = 5), float and double; and the whole ReactiveController::update() of the
-// Shadow-like hand on the analytic plant (grasp, release, hold under gravity, a
-// translation: every force-layer branch), with bounded and with run-time DOF storage; and
-// the analytic plant's own per-tick calls.
+// Proof that the per-tick path of a finger allocates nothing: forward_kinematics (with
+// and without the chain's plan), point_jacobian, ContactIk::solve (with and without the null-space
+// term), ContactIk::pseudo_inverse and HybridServo::update, for fixed-size fingers (planar 2 and 3
+// DOF, spatial 3, 4 and 5 DOF) and the run-time bounded finger (Dynamic, MaxDof = 5), float and
+// double; and the whole ReactiveController::update() of the Shadow-like hand on the analytic plant
+// (grasp, release, hold under gravity, a translation: every force-layer branch), with bounded and
+// with run-time DOF storage; and the analytic plant's own per-tick calls.
 //
 // One counter, fed at the bottom of every allocation path, guards the loop: the link of
 // this executable wraps the C allocation functions (tests/CMakeLists.txt: the linker's
@@ -189,6 +188,7 @@ TYPED_TEST(NoAllocationTest, PerTickPathDoesNotAllocate) {
       desired_velocity.push_back(inhand_test::random_vector<S, Dim>(rng, S(-0.05), S(0.05)));
     }
     inhand::FingerKinematics<Chain> ws(chain);
+    const inhand::ChainPlan<Chain> plan(chain);
     typename Chain::Jacobian J(Dim, n);
     J.setZero();
     inhand::ContactIk<S, Dim, Chain::Dof, Chain::MaxDof> ik(n);
@@ -207,7 +207,11 @@ TYPED_TEST(NoAllocationTest, PerTickPathDoesNotAllocate) {
     {
       NoAllocationRegion region;
       for (int i = 0; i < ticks; ++i) {
-        inhand::forward_kinematics(chain, q[static_cast<std::size_t>(i)], ws);
+        if (i % 2 == 0) {
+          inhand::forward_kinematics(chain, q[static_cast<std::size_t>(i)], ws);
+        } else {
+          inhand::forward_kinematics(chain, plan, q[static_cast<std::size_t>(i)], ws);
+        }
         const V& nrm = normals[static_cast<std::size_t>(i)];
         // Stretched ticks use the fingertip centre, on the link line: exactly singular.
         const V contact = (i % 7 == 0) ? V(ws.fingertip.position)

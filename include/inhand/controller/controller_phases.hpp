@@ -106,9 +106,9 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
 template <typename Types>
 FingerPoints<Types> finger_points(const TickInput<Types>& t, int i, TickScratch<Types>& sc,
                                   typename Types::FingerOutput& fo, ControllerWarning& w) noexcept {
-  const FingerPoints<Types> points(t.config.fingers[static_cast<std::size_t>(i)],
-                                   t.in.fingers[static_cast<std::size_t>(i)],
-                                   sc.fingers[static_cast<std::size_t>(i)].kinematics);
+  const auto k = static_cast<std::size_t>(i);
+  const FingerPoints<Types> points(t.config.fingers[k], sc.fingers[k].plan, t.in.fingers[k],
+                                   sc.fingers[k].kinematics);
   fo.implausible_contact = points.implausible_contact(t.config.contact_tolerance);
   if (fo.implausible_contact) w |= ControllerWarning::implausible_contact;
   return points;

@@ -3,8 +3,9 @@
 // of one tick without allocating. The state is copied before every tick and put back
 // if the tick produces a non-finite value (reactive_controller.hpp), so it holds only
 // what a tick reads from an earlier one; the scratch (forward kinematics, the IK and
-// its workspace, what layer 3 derives from the chains) is rewritten every tick before
-// it is read. Units as in controller_io.hpp.
+// its workspace) is rewritten every tick before it is read, except what configure()
+// derives from the chains once (each chain's plan, layer 3's limits and couplings). Units as in
+// controller_io.hpp.
 #pragma once
 
 #include "inhand/controller/controller_io.hpp"
@@ -119,11 +120,12 @@ struct ControllerState {
   }
 };
 
-/// One finger's per-tick workspace: forward kinematics, and layer 3 (the IK, the joint
-/// limits and couplings read from the chain).
+/// One finger's per-tick workspace: forward kinematics, its chain's plan, and layer 3
+/// (the IK, the joint limits and couplings read from the chain).
 template <typename Types>
 struct FingerWork {
   FingerKinematics<typename Types::Chain> kinematics{};
+  ChainPlan<typename Types::Chain> plan{};  ///< of the finger's chain, built by size_for
   FingerServo<typename Types::ScalarType, Types::kDim, Types::kDof, Types::kMaxDof> layer3{};
 };
 
@@ -150,6 +152,7 @@ struct TickScratch {
       FingerWork<Types>& w = fingers[static_cast<std::size_t>(i)];
       w.kinematics.joint_origins.setZero(Types::kDim, fc.chain.dof());
       w.kinematics.joint_axes.setZero(3, fc.chain.dof());
+      w.plan = ChainPlan<typename Types::Chain>(fc.chain);
       w.layer3.configure(fc.chain, c.ik);
     }
     touching = Planner::Mask::Zero(n);

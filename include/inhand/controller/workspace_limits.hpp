@@ -67,7 +67,8 @@ bool keep_twist_in_reach(const Tick& tick, State& state, Scratch& scratch,
       const typename Types::FingerInput& f = tick.in.fingers[i];
       auto& servo = scratch.fingers[i].layer3;
       if (!f.contact.touching || !servo.at_position_limit(f.joint_positions, tol)) continue;
-      const FingerPoints<Types> points(tick.config.fingers[i], f, scratch.fingers[i].kinematics);
+      const FingerPoints<Types> points(tick.config.fingers[i], scratch.fingers[i].plan, f,
+                                       scratch.fingers[i].kinematics);
       typename Types::Jacobian& J = state.fingers[i].jacobian;
       points.jacobian(f.contact.contact_point, J);
       const Vec n = f.contact.normal.normalized();

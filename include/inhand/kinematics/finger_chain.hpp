@@ -12,46 +12,44 @@
 #include <type_traits>
 
 #include "inhand/kinematics/chain_model.hpp"
+#include "inhand/kinematics/chain_plan.hpp"
 #include "inhand/math/sin_cos.hpp"
 
 namespace inhand {
 
 namespace detail {
-/// k when `axis` is exactly +e_k or -e_k (sign set to +1 or -1), otherwise -1.
-template <typename Scalar>
-inline int coordinate_axis(const Vector<Scalar, 3>& axis, Scalar& sign) noexcept {
-  for (int k = 0; k < 3; ++k) {
-    const Scalar a = axis(k);
-    if ((a == Scalar(1) || a == Scalar(-1)) && axis((k + 1) % 3) == Scalar(0) &&
-        axis((k + 2) % 3) == Scalar(0)) {
-      sign = a;
-      return k;
-    }
-  }
-  return -1;
+/// R <- R * Rot(e_k, q) given c = cos q and s = sin q, for the columns a = k + 1 and
+/// b = k + 2 (mod 3) of R: Rot_k maps e_a -> c e_a + s e_b, so only those two mix.
+template <int A, int B, typename Scalar>
+inline void mix_columns(Rotation<Scalar, 3>& R, Scalar c, Scalar s) noexcept {
+  const Vector<Scalar, 3> ca = R.col(A), cb = R.col(B);
+  R.col(A) = c * ca + s * cb;
+  R.col(B) = c * cb - s * ca;
 }
 
 /// R <- R * Rot(sign e_k, q) given c = cos q and s = sign sin q: only the two columns
 /// of R other than k mix (12 flops instead of building Rot and a 3 x 3 product).
 template <typename Scalar>
 inline void turn_about_coordinate_axis(Rotation<Scalar, 3>& R, int k, Scalar c, Scalar s) noexcept {
-  const int a = (k + 1) % 3, b = (k + 2) % 3;  // Rot_k maps e_a -> c e_a + s e_b
-  const Vector<Scalar, 3> ca = R.col(a), cb = R.col(b);
-  R.col(a) = c * ca + s * cb;
-  R.col(b) = c * cb - s * ca;
+  if (k == 0) {
+    mix_columns<1, 2>(R, c, s);
+  } else if (k == 1) {
+    mix_columns<2, 0>(R, c, s);
+  } else {
+    mix_columns<0, 1>(R, c, s);
+  }
 }
 
 /// One joint in space given s = sin q and c = cos q: writes the joint's world axis
 /// R * axis and turns R into R * Rot(axis, q). Real fingers mostly turn about a
-/// coordinate axis of their joint frame; R * Rot(+-e_k, q) then only mixes the other
-/// two columns of R. Any other axis is turned by `turn_general(R)`.
+/// coordinate axis of their joint frame (k >= 0: axis = sign e_k, as coordinate_axis()
+/// says); R * Rot(+-e_k, q) then only mixes the other two columns of R. Any other axis
+/// (k < 0) is turned by `turn_general(R)`.
 template <typename Scalar, typename DerivedAxis, typename TurnGeneral>
-inline void turn_joint(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Scalar s, Scalar c,
-                       const Eigen::MatrixBase<DerivedAxis>& world_axis_out,
+inline void turn_joint(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, int k, Scalar sign,
+                       Scalar s, Scalar c, const Eigen::MatrixBase<DerivedAxis>& world_axis_out,
                        TurnGeneral&& turn_general) noexcept {
   auto& world_axis = const_cast<Eigen::MatrixBase<DerivedAxis>&>(world_axis_out);
-  Scalar sign = Scalar(1);
-  const int k = coordinate_axis(axis, sign);
   if (k < 0) {
     world_axis = R * axis;
     turn_general(R);
@@ -75,24 +73,18 @@ inline void joint_sin_cos(Scalar q, Scalar& s, Scalar& c) noexcept {
   }
 }
 
-/// One spatial joint given s = sin q and c = cos q; a general axis by Rodrigues' formula
-/// Rot(axis, q) = I + s K + (1 - c) K^2 with K = [axis]x.
+/// One spatial joint given s = sin q and c = cos q (k, sign as for turn_joint); a general
+/// axis by Rodrigues' formula Rot(axis, q) = I + s K + (1 - c) K^2 with K = [axis]x.
 template <typename Scalar, typename DerivedAxis>
-inline void apply_joint_sincos(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, Scalar s,
-                               Scalar c,
+inline void apply_joint_sincos(Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& axis, int k,
+                               Scalar sign, Scalar s, Scalar c,
                                const Eigen::MatrixBase<DerivedAxis>& world_axis_out) noexcept {
-  turn_joint<Scalar>(R, axis, s, c, world_axis_out, [&](Rotation<Scalar, 3>& Rg) {
+  turn_joint<Scalar>(R, axis, k, sign, s, c, world_axis_out, [&](Rotation<Scalar, 3>& Rg) {
     const Rotation<Scalar, 3> K = hat<Scalar>(axis);
     const Rotation<Scalar, 3> K2 = K * K;
     const Rotation<Scalar, 3> Rj = Rotation<Scalar, 3>::Identity() + s * K + (Scalar(1) - c) * K2;
     Rg = Rg * Rj;
   });
-}
-
-/// Exactly the identity (the common case of a joint frame not turned at q = 0).
-template <typename Scalar, int Dim>
-inline bool is_identity(const Rotation<Scalar, Dim>& R) noexcept {
-  return R == Rotation<Scalar, Dim>::Identity();
 }
 }  // namespace detail
 
@@ -122,9 +114,11 @@ struct FingerKinematics {
 namespace detail {
 /// The chain walk of forward kinematics: from the base through each joint's fixed
 /// transform (its world origin written to ws), `turn(R, i, ws.joint_axes.col(i))` writes
-/// joint i's world axis and turns R by it, then the fingertip frame.
-template <typename Chain, typename TurnJoint>
-inline void walk_chain(const Chain& chain, FingerKinematics<Chain>& ws, TurnJoint&& turn) noexcept {
+/// joint i's world axis and turns R by it, then the fingertip frame. `facts`: a ChainPlan
+/// of the chain or detail::ChainTests (which frames turn).
+template <typename Chain, typename Facts, typename TurnJoint>
+inline void walk_chain(const Chain& chain, const Facts& facts, FingerKinematics<Chain>& ws,
+                       TurnJoint&& turn) noexcept {
   using Scalar = typename Chain::Scalar;
   constexpr int Dim = Chain::Dim;
   Rotation<Scalar, Dim> R = chain.base.rotation;
@@ -132,35 +126,33 @@ inline void walk_chain(const Chain& chain, FingerKinematics<Chain>& ws, TurnJoin
   for (int i = 0; i < chain.dof(); ++i) {
     const auto& j = chain.joints[i];
     p += R * j.parent_to_joint.position;
-    if (!is_identity(j.parent_to_joint.rotation)) R = R * j.parent_to_joint.rotation;
+    if (facts.frame_turns(i)) R = R * j.parent_to_joint.rotation;
     ws.joint_origins.col(i) = p;
     turn(R, i, ws.joint_axes.col(i));
   }
   ws.fingertip.position = p + R * chain.joint_to_tip.position;
-  if (is_identity(chain.joint_to_tip.rotation)) {
-    ws.fingertip.rotation = R;
-  } else {
+  if (facts.tip_turns()) {
     ws.fingertip.rotation = R * chain.joint_to_tip.rotation;
+  } else {
+    ws.fingertip.rotation = R;
   }
 }
-}  // namespace detail
 
-/// Forward kinematics: fills `ws` for joint angles q (size dof). In double each joint's
-/// sine and cosine come from sin_cos() (math/sin_cos.hpp: inline polynomials, within one
-/// unit in the last place of 1 of std::sin / std::cos), so the result equals
-/// forward_kinematics_sincos given sin_cos()'s values; in float from std::sin and std::cos
-/// (detail::joint_sin_cos says why). noexcept, no allocation.
-template <typename Chain, typename DerivedQ>
-inline void forward_kinematics(const Chain& chain, const Eigen::MatrixBase<DerivedQ>& q,
-                               FingerKinematics<Chain>& ws) noexcept {
+/// forward_kinematics() given the chain's facts (a ChainPlan or ChainTests).
+template <typename Chain, typename Facts, typename DerivedQ>
+inline void forward_kinematics_with(const Chain& chain, const Facts& facts,
+                                    const Eigen::MatrixBase<DerivedQ>& q,
+                                    FingerKinematics<Chain>& ws) noexcept {
   using Scalar = typename Chain::Scalar;
   constexpr int Dim = Chain::Dim;
-  detail::walk_chain(chain, ws, [&](Rotation<Scalar, Dim>& R, int i, auto&& world_axis) {
+  walk_chain(chain, facts, ws, [&](Rotation<Scalar, Dim>& R, int i, auto&& world_axis) {
     Scalar sin_q, cos_q;
-    detail::joint_sin_cos<Scalar>(static_cast<Scalar>(q(i)), sin_q, cos_q);
+    joint_sin_cos<Scalar>(static_cast<Scalar>(q(i)), sin_q, cos_q);
     const auto& j = chain.joints[i];
     if constexpr (Dim == 3) {
-      detail::apply_joint_sincos<Scalar>(R, j.axis, sin_q, cos_q, world_axis);
+      Scalar sign = Scalar(1);
+      const int k = facts.coordinate_axis(i, sign);
+      apply_joint_sincos<Scalar>(R, j.axis, k, sign, sin_q, cos_q, world_axis);
     } else {
       // Planar: the axis is +z or -z (validated); Rot(-z, q) = Rot(z, -q).
       const Scalar s = j.axis.z() * sin_q, c = cos_q;
@@ -172,6 +164,44 @@ inline void forward_kinematics(const Chain& chain, const Eigen::MatrixBase<Deriv
   });
 }
 
+/// forward_kinematics_sincos() given the chain's facts (a ChainPlan or ChainTests).
+template <typename Chain, typename Facts, typename DerivedS, typename DerivedC>
+inline void forward_kinematics_sincos_with(const Chain& chain, const Facts& facts,
+                                           const Eigen::MatrixBase<DerivedS>& sin_q,
+                                           const Eigen::MatrixBase<DerivedC>& cos_q,
+                                           FingerKinematics<Chain>& ws) noexcept {
+  static_assert(Chain::Dim == 3, "forward_kinematics_sincos is for spatial chains");
+  using Scalar = typename Chain::Scalar;
+  walk_chain(chain, facts, ws, [&](Rotation<Scalar, 3>& R, int i, auto&& world_axis) {
+    Scalar sign = Scalar(1);
+    const int k = facts.coordinate_axis(i, sign);
+    apply_joint_sincos<Scalar>(R, chain.joints[i].axis, k, sign, static_cast<Scalar>(sin_q(i)),
+                               static_cast<Scalar>(cos_q(i)), world_axis);
+  });
+}
+}  // namespace detail
+
+/// Forward kinematics: fills `ws` for joint angles q (size dof). In double each joint's
+/// sine and cosine come from sin_cos() (math/sin_cos.hpp: inline polynomials, within one
+/// unit in the last place of 1 of std::sin / std::cos), so the result equals
+/// forward_kinematics_sincos given sin_cos()'s values; in float from std::sin and std::cos
+/// (detail::joint_sin_cos says why). noexcept, no allocation.
+template <typename Chain, typename DerivedQ>
+inline void forward_kinematics(const Chain& chain, const Eigen::MatrixBase<DerivedQ>& q,
+                               FingerKinematics<Chain>& ws) noexcept {
+  detail::forward_kinematics_with(chain, detail::ChainTests<Chain>(chain), q, ws);
+}
+
+/// Forward kinematics with the chain's plan (chain_plan.hpp): the same result as above,
+/// bitwise, for the plan of this chain, without testing its frames and axes on every call.
+/// noexcept, no allocation.
+template <typename Chain, typename DerivedQ>
+inline void forward_kinematics(const Chain& chain, const ChainPlan<Chain>& plan,
+                               const Eigen::MatrixBase<DerivedQ>& q,
+                               FingerKinematics<Chain>& ws) noexcept {
+  detail::forward_kinematics_with(chain, plan, q, ws);
+}
+
 /// Forward kinematics in space from the sines and cosines of the joint angles (each of
 /// size dof) instead of the angles, for a caller that keeps them up to date itself (the
 /// simulator advances them by the angle-addition formula). Given sin_cos()'s values it
@@ -180,12 +210,17 @@ template <typename Chain, typename DerivedS, typename DerivedC>
 inline void forward_kinematics_sincos(const Chain& chain, const Eigen::MatrixBase<DerivedS>& sin_q,
                                       const Eigen::MatrixBase<DerivedC>& cos_q,
                                       FingerKinematics<Chain>& ws) noexcept {
-  static_assert(Chain::Dim == 3, "forward_kinematics_sincos is for spatial chains");
-  using Scalar = typename Chain::Scalar;
-  detail::walk_chain(chain, ws, [&](Rotation<Scalar, 3>& R, int i, auto&& world_axis) {
-    detail::apply_joint_sincos<Scalar>(R, chain.joints[i].axis, static_cast<Scalar>(sin_q(i)),
-                                       static_cast<Scalar>(cos_q(i)), world_axis);
-  });
+  detail::forward_kinematics_sincos_with(chain, detail::ChainTests<Chain>(chain), sin_q, cos_q, ws);
+}
+
+/// forward_kinematics_sincos with the chain's plan (chain_plan.hpp): bitwise the same
+/// result for the plan of this chain. noexcept, no allocation.
+template <typename Chain, typename DerivedS, typename DerivedC>
+inline void forward_kinematics_sincos(const Chain& chain, const ChainPlan<Chain>& plan,
+                                      const Eigen::MatrixBase<DerivedS>& sin_q,
+                                      const Eigen::MatrixBase<DerivedC>& cos_q,
+                                      FingerKinematics<Chain>& ws) noexcept {
+  detail::forward_kinematics_sincos_with(chain, plan, sin_q, cos_q, ws);
 }
 
 /// Jacobian of the world velocity of a point attached to the distal link and now at

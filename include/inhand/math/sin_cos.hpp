@@ -89,28 +89,37 @@ struct SinCosKernel<float> {
 };
 }  // namespace detail
 
+namespace detail {
+/// The polynomial part for one angle of at most the kernel's reduced range (the file
+/// comment); a larger, infinite or NaN angle gives finite garbage, which the callers
+/// replace. Kept free of loops and calls so that it inlines wherever it is used.
+template <typename Scalar>
+inline void sin_cos_reduced(Scalar q, Scalar& s, Scalar& c) noexcept {
+  using K = SinCosKernel<Scalar>;
+  // k = nearest integer to q 2/pi, 0 for an angle outside the reduced range (its s and c
+  // are replaced by the caller; the int conversion of a larger one would overflow). Only
+  // the conversion's argument is selected: GCC 12 vectorises the array loop so.
+  const Scalar t = q * K::kTwoOverPi;
+  const Scalar t_in = std::abs(q) <= K::kReducedRange ? t : Scalar(0);
+  const int k = static_cast<int>(t_in + std::copysign(Scalar(0.5), t));
+  const Scalar kf = static_cast<Scalar>(k);
+  const Scalar r = ((q - kf * K::kPio2a) - kf * K::kPio2b) - kf * K::kPio2c;
+  const Scalar z = r * r;
+  const Scalar sr = K::sin_r(r, z), cr = K::cos_r(z);
+  // q = r + k pi/2: sin q = (sin r, cos r, -sin r, -cos r) and cos q = (cos r, -sin r,
+  // -cos r, sin r) for k mod 4 = 0, 1, 2, 3.
+  const Scalar sq = (k & 1) ? cr : sr, cq = (k & 1) ? sr : cr;
+  s = (k & 2) ? -sq : sq;
+  c = ((k + 1) & 2) ? -cq : cq;
+}
+}  // namespace detail
+
 /// s[i] = sin q[i] and c[i] = cos q[i] for i in [0, n) (file comment: method, accuracy).
 template <typename Scalar>
 inline void sin_cos(const Scalar* q, Scalar* s, Scalar* c, int n) noexcept {
   using K = detail::SinCosKernel<Scalar>;
   if constexpr (K::kPolynomial) {
-    for (int i = 0; i < n; ++i) {
-      // k = nearest integer to q 2/pi, 0 for an angle outside the reduced range (its
-      // s and c are replaced below; the int conversion of a larger one would overflow).
-      // Only the conversion's argument is selected: GCC 12 vectorises the loop so.
-      const Scalar t = q[i] * K::kTwoOverPi;
-      const Scalar t_in = std::abs(q[i]) <= K::kReducedRange ? t : Scalar(0);
-      const int k = static_cast<int>(t_in + std::copysign(Scalar(0.5), t));
-      const Scalar kf = static_cast<Scalar>(k);
-      const Scalar r = ((q[i] - kf * K::kPio2a) - kf * K::kPio2b) - kf * K::kPio2c;
-      const Scalar z = r * r;
-      const Scalar sr = K::sin_r(r, z), cr = K::cos_r(z);
-      // q = r + k pi/2: sin q = (sin r, cos r, -sin r, -cos r) and cos q = (cos r, -sin r,
-      // -cos r, sin r) for k mod 4 = 0, 1, 2, 3.
-      const Scalar sq = (k & 1) ? cr : sr, cq = (k & 1) ? sr : cr;
-      s[i] = (k & 2) ? -sq : sq;
-      c[i] = ((k + 1) & 2) ? -cq : cq;
-    }
+    for (int i = 0; i < n; ++i) detail::sin_cos_reduced<Scalar>(q[i], s[i], c[i]);
     for (int i = 0; i < n; ++i) {
       if (!(std::abs(q[i]) <= K::kReducedRange)) {
         s[i] = std::sin(q[i]);
@@ -125,10 +134,18 @@ inline void sin_cos(const Scalar* q, Scalar* s, Scalar* c, int n) noexcept {
   }
 }
 
-/// One angle: s = sin q, c = cos q, as sin_cos(&q, &s, &c, 1).
+/// One angle: s = sin q, c = cos q, the same values as sin_cos(&q, &s, &c, 1).
 template <typename Scalar>
 inline void sin_cos(Scalar q, Scalar& s, Scalar& c) noexcept {
-  sin_cos<Scalar>(&q, &s, &c, 1);
+  using K = detail::SinCosKernel<Scalar>;
+  if constexpr (K::kPolynomial) {
+    if (std::abs(q) <= K::kReducedRange) {
+      detail::sin_cos_reduced<Scalar>(q, s, c);
+      return;
+    }
+  }
+  s = std::sin(q);
+  c = std::cos(q);
 }
 
 }  // namespace inhand

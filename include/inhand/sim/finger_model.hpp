@@ -36,6 +36,7 @@ struct FingerModel {
 
   explicit FingerModel(PlantFinger c)
       : chain(std::move(c)),
+        plan(chain),
         ws(chain),
         q(JointVector::Zero(chain.dof())),
         qd(JointVector::Zero(chain.dof())),
@@ -49,6 +50,7 @@ struct FingerModel {
   }
 
   PlantFinger chain;
+  ChainPlan<PlantFinger> plan;  ///< of chain, which the plant does not change
   FingerKinematics<PlantFinger> ws;
   JointVector q, qd, qd_cmd;
   // sin/cos of q, advanced by the angle-addition formula with the sin/cos of h qd
@@ -73,7 +75,7 @@ struct FingerModel {
       sin_q(j) = std::sin(q(j));
       cos_q(j) = std::cos(q(j));
     }
-    forward_kinematics_sincos(chain, sin_q, cos_q, ws);
+    forward_kinematics_sincos(chain, plan, sin_q, cos_q, ws);
     update_tip_velocity();
   }
 
@@ -162,7 +164,7 @@ struct FingerModel {
         cos_q(j) = std::cos(q(j));
       }
     }
-    if (moved) forward_kinematics_sincos(chain, sin_q, cos_q, ws);
+    if (moved) forward_kinematics_sincos(chain, plan, sin_q, cos_q, ws);
     update_tip_velocity();
   }
 
