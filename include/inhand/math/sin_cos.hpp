@@ -91,8 +91,8 @@ struct SinCosKernel<float> {
 
 namespace detail {
 /// The polynomial part for one angle of at most the kernel's reduced range (the file
-/// comment); a larger, infinite or NaN angle gives finite garbage, which the callers
-/// replace. Kept free of loops and calls so that it inlines wherever it is used.
+/// comment); for a larger, infinite or NaN angle its s and c mean nothing, and the callers
+/// replace them. Kept free of loops and calls so that it inlines wherever it is used.
 template <typename Scalar>
 inline void sin_cos_reduced(Scalar q, Scalar& s, Scalar& c) noexcept {
   using K = SinCosKernel<Scalar>;
