@@ -13,7 +13,6 @@
 #include "inhand/math/pi_controller.hpp"
 #include "inhand/math/damped_least_squares.hpp"
 #include "inhand/kinematics/contact_kinematics.hpp"
-#include "inhand/kinematics/chain_plan.hpp"
 #include "inhand/kinematics/finger_chain.hpp"
 #include "inhand/controller/ik.hpp"
 #include "inhand/controller/servo.hpp"
