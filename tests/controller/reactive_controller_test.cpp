@@ -19,6 +19,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/grasp_forces.hpp"
@@ -1623,6 +1624,80 @@ TEST(ReactiveControllerHardening, NonFiniteIntermediateGivesNumericalFaultZeroOu
   std::string why;
   EXPECT_TRUE(same_output(out, twin_out, why)) << why;
   EXPECT_EQ(out.numerical_fault, nullptr);
+}
+
+/// Every value non_finite_stage() covers, with the stage it must name: a NaN or an
+/// infinity in any one of them, the rest of a real tick's output left as it was, is found
+/// (the one-pass check of the common case misses none) and named after its stage.
+TEST(ReactiveControllerHardening, NonFiniteStageNamesEveryPoisonedOutputValue) {
+  using Types = PlanarCtrl::Types;
+  using Output = PlanarCtrl::Output;
+  Scene<PlanarCtrl> s = planar_scene<PlanarCtrl>();
+  PlanarCtrl c;
+  PlanarCtrl::Input in;
+  Output clean;
+  configure_and_grasp(c, s, in, clean);
+  ASSERT_TRUE(c.start_manipulation(planar_task(s.plant.box.pose)).ok());
+  for (int k = 0; k < 50; ++k) ASSERT_EQ(tick(c, s.plant, in, clean), ControllerStatus::ok);
+  ASSERT_EQ(inhand::non_finite_stage<Types>(clean), nullptr);
+  // (stage, every value of one member): the member reached through a pointer into a copy.
+  using Values = std::function<std::vector<double*>(Output&)>;
+  auto all = [](auto& m) {
+    std::vector<double*> v;
+    for (Eigen::Index k = 0; k < m.size(); ++k) v.push_back(m.data() + k);
+    return v;
+  };
+  std::vector<std::pair<std::string, Values>> members = {
+      {"trajectory", [&](Output& o) { return all(o.desired_object_pose.position); }},
+      {"trajectory", [&](Output& o) { return all(o.desired_object_pose.rotation); }},
+      {"trajectory", [&](Output& o) { return all(o.feedforward_twist); }},
+      {"trajectory", [](Output& o) { return std::vector<double*>{&o.manipulation_time}; }},
+      {"pose_feedback", [&](Output& o) { return all(o.pose_error); }},
+      {"pose_feedback", [&](Output& o) { return all(o.commanded_twist); }},
+      {"pose_feedback", [&](Output& o) { return all(o.pose_error_integral); }},
+      {"force_layer", [&](Output& o) { return all(o.force_residual); }},
+      {"force_layer", [&](Output& o) { return all(o.load_estimate); }},
+      {"force_layer", [](Output& o) { return std::vector<double*>{&o.grip}; }},
+  };
+  for (std::size_t i = 0; i < clean.fingers.size(); ++i) {
+    members.push_back({"force_layer", [i](Output& o) {
+                         auto& f = o.fingers[i];
+                         return std::vector<double*>{&f.desired_normal_force, &f.force_target,
+                                                     &f.stiffness_estimate, &f.force_integral};
+                       }});
+    members.push_back({"servo", [&, i](Output& o) {
+                         auto& f = o.fingers[i];
+                         std::vector<double*> v = all(f.desired_contact_velocity);
+                         for (auto* m : {&f.servo.motion, &f.servo.force, &f.servo.total})
+                           for (double* p : all(*m)) v.push_back(p);
+                         return v;
+                       }});
+    members.push_back({"ik", [&, i](Output& o) {
+                         auto& f = o.fingers[i];
+                         std::vector<double*> v = all(f.joint_velocities);
+                         for (double* p : {&f.ik.min_singular_value, &f.ik.damping,
+                                           &f.ik.limit_scale, &f.ik.task_error})
+                           v.push_back(p);
+                         return v;
+                       }});
+  }
+  int checked = 0;
+  for (const auto& [stage, values] : members) {
+    Output probe = clean;
+    const std::size_t count = values(probe).size();
+    ASSERT_GT(count, 0u) << stage;
+    for (std::size_t k = 0; k < count; ++k) {
+      for (double poison : {std::numeric_limits<double>::quiet_NaN(), kInf, -kInf}) {
+        Output o = clean;
+        *values(o)[k] = poison;
+        const char* named = inhand::non_finite_stage<Types>(o);
+        ASSERT_NE(named, nullptr) << stage << " value " << k << " = " << poison;
+        EXPECT_EQ(std::string(named), stage) << "value " << k << " = " << poison;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 100);
 }
 
 TEST(ReactiveControllerHardening, ReflectedObjectPoseAndUnnormalisedNormalsAreInvalid) {
