@@ -15,6 +15,7 @@
 #include "inhand/controller/grasp.hpp"
 #include "inhand/controller/pose_feedback.hpp"
 #include "inhand/controller/sensor_gates.hpp"
+#include "inhand/math/whole_copy.hpp"
 
 namespace inhand {
 
@@ -31,8 +32,9 @@ struct FingerMemory {
   FingerServoMemory<Scalar, Types::kDim, Types::kDof, Types::kMaxDof> layer3{};
   /// The Jacobian of the point servoed on the last tick: this tick's measured step
   /// of the fingertip is J (q - q_prev).
-  typename Types::Jacobian jacobian{};
-  typename Types::JointVector q_prev{};  ///< rad, joint positions of the last tick
+  detail::WholeCopy<typename Types::Jacobian> jacobian{};
+  detail::WholeCopy<typename Types::JointVector>
+      q_prev{};  ///< rad, joint positions of the last tick
   bool has_q_prev = false;
   GraspTarget<Scalar, Types::kDim> target{};
   Scalar grasp_pattern = Scalar(0);  ///< N, q_g of grasp.hpp, set by start_grasp

@@ -30,6 +30,7 @@
 #include "inhand/controller/ik.hpp"
 #include "inhand/controller/servo.hpp"
 #include "inhand/math/cone_residual.hpp"
+#include "inhand/math/whole_copy.hpp"
 
 namespace inhand {
 
@@ -41,7 +42,7 @@ template <typename Scalar, int Dim, int Dof, int MaxDof = Dof>
 struct FingerServoMemory {
   using JointVector = typename ContactIk<Scalar, Dim, Dof, MaxDof>::JointVector;
   HybridServo<Scalar, Dim> servo{};
-  JointVector last_command{};  ///< rad/s, the last valid tick's joint velocities
+  detail::WholeCopy<JointVector> last_command{};  ///< rad/s, the last valid tick's joint velocities
 
   /// Sizes for `dof` joints (allocates only for run-time DOF without a bound), servo
   /// integrators and last command zero.
