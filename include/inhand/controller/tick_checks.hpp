@@ -12,16 +12,9 @@
 
 namespace inhand {
 namespace detail {
-/// x * 0 summed over m: exactly 0 when every value of m is finite, NaN otherwise
-/// (inf * 0 and NaN * 0 are NaN). Sums of several stay 0 or NaN alike.
-template <typename Derived>
-typename Derived::Scalar zero_sum(const Eigen::MatrixBase<Derived>& m) noexcept {
-  return (m.derived().array() * typename Derived::Scalar(0)).sum();
-}
-
 /// Whether check_input() finds `in` valid: the same conditions, combined without early
-/// exits (finiteness as one zero_sum), so that a valid input -- every tick but a faulty
-/// one -- takes one pass and no search for the field to name.
+/// exits (finiteness as one zero_sum, math/types.hpp), so that a valid input -- every tick but a
+/// faulty one -- takes one pass and no search for the field to name.
 template <typename Types>
 bool input_valid(const typename Types::Config& c, const typename Types::Input& in, bool has_time,
                  double last_time) noexcept {

@@ -51,15 +51,21 @@ inline Vector<Scalar, 2> angular_cross(const AngularVector<Scalar, 2>& omega,
   return Vector<Scalar, 2>(-omega(0) * r.y(), omega(0) * r.x());
 }
 
+/// x * 0 summed over m: exactly 0 when every coefficient is finite, NaN otherwise (inf * 0
+/// and NaN * 0 are NaN; a sum of zeros cannot overflow). Sums of several stay 0 or NaN
+/// alike, so one comparison checks many matrices (controller/tick_checks.hpp).
+template <typename Derived>
+inline typename Derived::Scalar zero_sum(const Eigen::MatrixBase<Derived>& m) noexcept {
+  return (m.derived().array() * typename Derived::Scalar(0)).sum();
+}
+
 /// True when every coefficient is finite (no NaN, no +-inf).
 template <typename Derived>
 inline bool all_finite(const Eigen::MatrixBase<Derived>& m) noexcept {
-  // x * 0 is 0 for every finite x and NaN for NaN and +-inf, so the sum is 0 exactly when
-  // all are finite (a sum of zeros cannot overflow); one branch, and a reduction the
-  // compiler vectorises, instead of a test per coefficient. Like (x - x) == 0, it does not
-  // raise FE_INVALID for quiet NaN on IEEE hardware.
-  using Scalar = typename Derived::Scalar;
-  return (m.derived().array() * Scalar(0)).sum() == Scalar(0);
+  // One branch, and a reduction the compiler vectorises, instead of a test per
+  // coefficient. Like (x - x) == 0, it does not raise FE_INVALID for quiet NaN on IEEE
+  // hardware.
+  return zero_sum(m) == typename Derived::Scalar(0);
 }
 /// J x for a J with a fixed row count (a contact Jacobian: Dim rows) and any column count,
 /// as the sum of x_c times column c. For a run-time column count Eigen's general product
