@@ -65,6 +65,17 @@ if(INHAND_HAVE_CAMPAIGN)
   set_tests_properties(campaign.thumb_at_a_limit_grasp_at_risk_1620
                        campaign.wide_thumb_at_a_limit_grasp_at_risk_550
                        PROPERTIES LABELS campaign TIMEOUT 120)
+  # Wide-range cases whose held thumb was pressed at its limit (481: 4.2 -> 6.5 N against
+  # 4 N, the opposite finger's contact opening 14 times in a cycle of about 104 ms, the cut
+  # released whenever the grasp stopped reporting a risk; 498: every contact kept, final
+  # error 0.516 mm against 0.5 mm). The cut now stays on while the twist asks beyond the
+  # edge, and the pose loop does not wind up along it (workspace_limits.hpp): both pass.
+  foreach(seed 481 498)
+    add_test(NAME campaign.wide_thumb_pressed_at_a_limit_${seed}
+             COMMAND inhand_campaign --wide --first-seed ${seed} --count 1 --min-success 1)
+    set_tests_properties(campaign.wide_thumb_pressed_at_a_limit_${seed}
+                         PROPERTIES LABELS campaign TIMEOUT 120)
+  endforeach()
   # Wide-range cases that lost a contact a few milliseconds after release: heavy spheres on
   # the three-finger hand (114: 395 g, 634: 343 g, 792: 367 g), whose released weight took
   # a finger's whole grip at release_grip 2. The grasp now presses with a grip sized so

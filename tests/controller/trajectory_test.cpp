@@ -2,7 +2,8 @@
 // pose and feed-forward twist continuity across segment boundaries, the feed-forward
 // twist against central finite differences of the pose (position derivative and
 // so3_log(R(t+h) R(t-h)^T) / 2h), reciprocation, the paper's rotation about X by
-// -0.2 rad, hold, the planar version, capacity, invalid segments and NaN time.
+// -0.2 rad, hold, the planar version, capacity, invalid segments and NaN time; and the
+// pose loop's integral held along a cut twist (controller/pose_feedback.hpp).
 #include "inhand/controller/trajectory.hpp"
 
 #include <gtest/gtest.h>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "common/test_support.hpp"
+#include "inhand/controller/pose_feedback.hpp"
 
 namespace {
 
@@ -456,6 +458,63 @@ TEST(ObjectTrajectory, SegmentsThatWouldOverflowAreRefused) {
   Traj u;
   u.reset(bad);
   EXPECT_STREQ(u.validate().field, "trajectory.start_pose.rotation");
+}
+
+// ---------------------------------------------------------------------------
+// The pose loop's conditional integration against a cut twist (PoseLoop::hold_integral_along,
+// used at the workspace's edge: workspace_limits.hpp). A constant pose error with a part
+// along the cut's direction d is integrated for 50 ticks, then for 200 more with the cut
+// on: the integral's part along d stays where the cut found it (it would grow by
+// 200 dt (d . e) without the hold), every part across d integrates as in a loop without the
+// cut, and the norm stays below that loop's. An error pointing away from the cut, a zero
+// or a non-finite removed twist leave the integral bitwise as without the call.
+TEST(PoseLoop, HeldIntegralDoesNotWindUpAlongTheCutAndIntegratesAcrossIt) {
+  using Loop = inhand::PoseLoop<double, 3>;
+  using Tw = Loop::TwistT;
+  inhand::PoseFeedback<double> pf;
+  pf.position_integral_limit = 1.0;  // the norm bounds kept out of play
+  pf.orientation_integral_limit = 1.0;
+  const double dt = 1e-3;
+  auto rng = inhand_test::make_rng(1511);
+  Pose<double, 3> measured;
+  measured.position = V3(0.01, -0.02, 0.15);
+  for (int k = 0; k < scaled(200); ++k) {
+    const Tw d = inhand_test::random_unit_vector<double, 6>(rng);
+    Tw e = inhand_test::random_vector<double, 6>(rng, -0.01, 0.01);
+    if (d.dot(e) < 0) e = -e;
+    Pose<double, 3> desired = measured;
+    desired.position += e.head<3>();
+    desired.rotation = inhand::rotation_exp<double>(V3(e.tail<3>())) * measured.rotation;
+    const Twist3 zero = Twist3::Zero();
+    Loop held, free;
+    for (int t = 0; t < 50; ++t) {
+      held.update(pf, desired, zero, measured, dt);
+      free.update(pf, desired, zero, measured, dt);
+    }
+    const double along = d.dot(held.integral());
+    ASSERT_GT(along, 0.0);
+    for (int t = 0; t < 200; ++t) {
+      const auto step = held.update(pf, desired, zero, measured, dt);
+      held.hold_integral_along(0.3 * d, step.pose_error, dt);
+      free.update(pf, desired, zero, measured, dt);
+    }
+    const Tw hi = held.integral(), fi = free.integral();
+    EXPECT_NEAR(d.dot(hi), along, 1e-12) << "case " << k;
+    EXPECT_GT(d.dot(fi), along + 150 * dt * d.dot(e)) << "case " << k;
+    EXPECT_LE((Tw(hi - d.dot(hi) * d) - Tw(fi - d.dot(fi) * d)).norm(), 1e-12) << "case " << k;
+    EXPECT_LE(hi.norm(), fi.norm()) << "case " << k;
+    // Away from the cut, nothing removed, or a removed twist that is not finite.
+    Loop other = held;
+    for (const Tw& removed :
+         {Tw(-d), Tw(Tw::Zero()), Tw(Tw::Constant(std::numeric_limits<double>::quiet_NaN())),
+          Tw(Tw::Constant(std::numeric_limits<double>::infinity()))}) {
+      Loop a = other, b = other;
+      const auto step = a.update(pf, desired, zero, measured, dt);
+      b.update(pf, desired, zero, measured, dt);
+      a.hold_integral_along(removed, step.pose_error, dt);
+      EXPECT_TRUE(a.integral() == b.integral()) << "case " << k;
+    }
+  }
 }
 
 }  // namespace

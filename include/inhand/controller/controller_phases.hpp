@@ -258,13 +258,10 @@ ControllerStatus manipulation_phase(
   if (has(fs, ForceLayerStatus::grip_raised)) w |= ControllerWarning::grip_raised;
   if (has(fs, ForceLayerStatus::beyond_capacity)) w |= ControllerWarning::beyond_capacity;
   if (has(fs, ForceLayerStatus::integral_limited)) w |= ControllerWarning::force_integral_limited;
-  // Layers 2-3 per finger, the twist kept within reach (workspace_limits.hpp): always with
-  // Config::keep_twist_in_reach, else while the grasp is at risk and at_risk_hold after.
+  // Layers 2-3 per finger, the twist kept within reach (workspace_limits.hpp).
   typename Types::TwistT twist = pose.commanded_twist;
-  const bool cut = st.hold_risk(fs, t.config.at_risk_hold, t.dt) || t.config.keep_twist_in_reach;
-  if (detail::keep_twist_in_reach<Types>(t, st, sc, twist, cut))
-    w |= cut ? ControllerWarning::workspace_limited | ControllerWarning::workspace_cut
-             : ControllerWarning::workspace_limited;
+  w |= detail::cut_twist_at_edge<Types>(t, st, sc, pose,
+                                        st.hold_risk(fs, t.config.at_risk_hold, t.dt), twist);
   out.commanded_twist = twist;
   bool lost = false;
   for (int i = 0; i < n; ++i) {

@@ -69,6 +69,9 @@ struct ControllerState {
   Scalar grasp_grip = Scalar(0);         ///< s_g of the grasp (grasp.hpp); 0: none begun
   bool grasp_grip_measured = false;      ///< s_g sized over the measured normals yet
   bool grasp_grip_capped = false;        ///< max_force lowered s_g (release_grip_scale)
+  /// The twist was cut on the last tick and still asked beyond the workspace's edge
+  /// (workspace_limits.hpp: the cut then stays on).
+  bool edge_cut = false;
   PoseLoop<Scalar, Dim> pose_loop{};
   PoseGate<Scalar, Dim> pose_gate{};
 
@@ -89,11 +92,12 @@ struct ControllerState {
       planner.set_role(i, fc.role);
     }
   }
-  /// The task loops' memory (the pose loop, the at-risk hold), cleared when a task starts
-  /// from rest.
+  /// The task loops' memory (the pose loop, the at-risk hold, the held cut), cleared when a task
+  /// starts from rest.
   void reset_task_loops() noexcept {
     pose_loop.reset();
     risk_hold = Scalar(0);
+    edge_cut = false;
   }
   /// Whether the twist is cut for the grasp at risk (the force layer's status `fs` says
   /// beyond_capacity or slipping): on a tick at risk, and for `hold` s after the last one

@@ -81,6 +81,23 @@ class PoseLoop {
   void reset() noexcept { integral_.setZero(); }
   const TwistT& integral() const noexcept { return integral_; }  ///< (m s; rad s)
 
+  /// Conditional integration against a cut made after this loop: `removed` is what a later
+  /// stage took out of this tick's commanded twist (the workspace cut, workspace_limits.hpp),
+  /// `pose_error` this tick's error, dt [s] this tick's. With d the unit direction of
+  /// `removed` (the Euclidean norm of (v; omega) the cut uses), the integral's part along d
+  /// gives back this tick's growth dt (d . e) when that points the way the cut removed,
+  /// never below zero: I <- I - min(dt (d . e), d . I) d when both are > 0. The integral then
+  /// does not wind up against a constraint the twist cannot pass, and its norm never grows
+  /// (what it takes out is at most its own part along d). Otherwise, or with `removed`
+  /// zero or not finite, I is left alone.
+  void hold_integral_along(const TwistT& removed, const TwistT& pose_error, Scalar dt) noexcept {
+    const Scalar r = removed.norm();
+    if (!(r > Scalar(0)) || !is_finite(r)) return;
+    const TwistT d = removed / r;
+    const Scalar grown = dt * d.dot(pose_error), held = d.dot(integral_);
+    if (grown > Scalar(0) && held > Scalar(0)) integral_ -= std::min(grown, held) * d;
+  }
+
   /// One tick: desired pose and feed-forward twist, measured pose, dt > 0 [s].
   PoseLoopStep<Scalar, Dim> update(const PoseFeedback<Scalar>& pf, const Pose<Scalar, Dim>& desired,
                                    const TwistT& feedforward, const Pose<Scalar, Dim>& measured,

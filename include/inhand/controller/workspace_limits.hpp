@@ -26,8 +26,18 @@
 // is also projected onto c^T V = 0 (the least change of V in the Euclidean norm of
 // (v_o; omega_o); a twist with c^T V <= 0, away from the limit, is left alone; several
 // constraints in turn, a second sweep when the first cut something), so the object stops
-// at the edge of the hand's workspace: the pose error then grows, the pose loop's
-// integral up to its bound (pose_integral_limited). Fingers that
+// at the edge of the hand's workspace: the pose error then grows along the cut.
+//
+// cut_twist_at_edge makes that cut a saturation with its anti-windup. (1) Once made, the
+// cut stays on for as long as the twist goes on asking beyond the edge (the state's
+// edge_cut), whatever the risk flags do: the constraint is released when the demand turns
+// back or the held joint leaves its bound, not when the grasp, relieved by the cut, stops
+// reporting a risk. Released on the risk instead, the cut alternated with the push that
+// made the risk (wide campaign seed 481: a cycle of about 104 ms, the held thumb pressed
+// to 6.5 N against 4 N, the opposite finger's contact opening once a cycle). (2) While it
+// is on, the pose loop does not integrate the error along the direction the cut took out
+// (PoseLoop::hold_integral_along): the integral owns that direction only while the twist
+// can follow it. Fingers that
 // do not touch are not considered. Cost when no joint is within kHeldJointTolerance of a
 // held bound: a few comparisons per joint; else forward kinematics, the contact Jacobian
 // and a Dim x Dim symmetric eigenproblem per held joint (one more, and at most
@@ -91,6 +101,25 @@ bool keep_twist_in_reach(const Tick& tick, State& state, Scratch& scratch,
     if (!asked) break;  // nothing cut: a second sweep would find the same
   }
   return asked;
+}
+
+/// The twist at the workspace's edge for the manipulation phase (the file comment):
+/// `twist` is the pose loop's commanded twist (`pose`'s) on entry and what the fingers
+/// follow on return; `at_risk` is the state's hold_risk for this tick. Cuts with
+/// Config::keep_twist_in_reach, at risk, or while the state's edge_cut says the last
+/// tick's cut is still asked for; returns workspace_limited when the twist asked beyond the
+/// edge, with workspace_cut when it was cut.
+template <typename Types, typename Tick, typename State, typename Scratch, typename Step>
+ControllerWarning cut_twist_at_edge(const Tick& tick, State& state, Scratch& scratch,
+                                    const Step& pose, bool at_risk,
+                                    typename Types::TwistT& twist) noexcept {
+  const bool cut = at_risk || tick.config.keep_twist_in_reach || state.edge_cut;
+  const bool asked = keep_twist_in_reach<Types>(tick, state, scratch, twist, cut);
+  state.edge_cut = cut && asked;
+  if (!asked) return ControllerWarning::none;
+  if (!cut) return ControllerWarning::workspace_limited;
+  state.pose_loop.hold_integral_along(pose.commanded_twist - twist, pose.pose_error, tick.dt);
+  return ControllerWarning::workspace_limited | ControllerWarning::workspace_cut;
 }
 
 }  // namespace inhand::detail
