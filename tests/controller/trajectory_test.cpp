@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/test_support.hpp"
@@ -462,57 +463,90 @@ TEST(ObjectTrajectory, SegmentsThatWouldOverflowAreRefused) {
 
 // ---------------------------------------------------------------------------
 // The pose loop's conditional integration against a cut twist (PoseLoop::hold_integral_along,
-// used at the workspace's edge: workspace_limits.hpp). A constant pose error with a part
-// along the cut's direction d is integrated for 50 ticks, then for 200 more with the cut
-// on: the integral's part along d stays where the cut found it (it would grow by
-// 200 dt (d . e) without the hold), every part across d integrates as in a loop without the
-// cut, and the norm stays below that loop's. An error pointing away from the cut, a zero
-// or a non-finite removed twist leave the integral bitwise as without the call.
+// used at the workspace's edge: workspace_limits.hpp), with equal and with unequal integral
+// gains K = diag(k_p, k_o). A constant pose error with a part along the cut's direction is
+// integrated for 50 ticks, then for 200 more with the cut on: what the integral adds to the
+// twist along the removed direction r (r . K I) stays where the cut found it (a loop without
+// the cut adds 200 dt r . K e), every part of I across d = K r / |K r| integrates as in that
+// loop, and the norm stays below that loop's (the norm bounds kept out of play). The give-back
+// never takes the part along d below zero (an integral that one tick lifts from below zero
+// ends at zero), and leaves a part below zero alone. An error pointing away from the cut, a
+// zero or a non-finite removed twist leave the integral bitwise as without the call.
 TEST(PoseLoop, HeldIntegralDoesNotWindUpAlongTheCutAndIntegratesAcrossIt) {
   using Loop = inhand::PoseLoop<double, 3>;
   using Tw = Loop::TwistT;
-  inhand::PoseFeedback<double> pf;
-  pf.position_integral_limit = 1.0;  // the norm bounds kept out of play
-  pf.orientation_integral_limit = 1.0;
   const double dt = 1e-3;
-  auto rng = inhand_test::make_rng(1511);
   Pose<double, 3> measured;
   measured.position = V3(0.01, -0.02, 0.15);
-  for (int k = 0; k < scaled(200); ++k) {
-    const Tw d = inhand_test::random_unit_vector<double, 6>(rng);
-    Tw e = inhand_test::random_vector<double, 6>(rng, -0.01, 0.01);
-    if (d.dot(e) < 0) e = -e;
+  auto desired_at = [&](const Tw& e) {
     Pose<double, 3> desired = measured;
     desired.position += e.head<3>();
     desired.rotation = inhand::rotation_exp<double>(V3(e.tail<3>())) * measured.rotation;
-    const Twist3 zero = Twist3::Zero();
-    Loop held, free;
-    for (int t = 0; t < 50; ++t) {
-      held.update(pf, desired, zero, measured, dt);
-      free.update(pf, desired, zero, measured, dt);
-    }
-    const double along = d.dot(held.integral());
-    ASSERT_GT(along, 0.0);
-    for (int t = 0; t < 200; ++t) {
-      const auto step = held.update(pf, desired, zero, measured, dt);
-      held.hold_integral_along(0.3 * d, step.pose_error, dt);
-      free.update(pf, desired, zero, measured, dt);
-    }
-    const Tw hi = held.integral(), fi = free.integral();
-    EXPECT_NEAR(d.dot(hi), along, 1e-12) << "case " << k;
-    EXPECT_GT(d.dot(fi), along + 150 * dt * d.dot(e)) << "case " << k;
-    EXPECT_LE((Tw(hi - d.dot(hi) * d) - Tw(fi - d.dot(fi) * d)).norm(), 1e-12) << "case " << k;
-    EXPECT_LE(hi.norm(), fi.norm()) << "case " << k;
-    // Away from the cut, nothing removed, or a removed twist that is not finite.
-    Loop other = held;
-    for (const Tw& removed :
-         {Tw(-d), Tw(Tw::Zero()), Tw(Tw::Constant(std::numeric_limits<double>::quiet_NaN())),
-          Tw(Tw::Constant(std::numeric_limits<double>::infinity()))}) {
-      Loop a = other, b = other;
-      const auto step = a.update(pf, desired, zero, measured, dt);
-      b.update(pf, desired, zero, measured, dt);
-      a.hold_integral_along(removed, step.pose_error, dt);
-      EXPECT_TRUE(a.integral() == b.integral()) << "case " << k;
+    return desired;
+  };
+  const Twist3 zero = Twist3::Zero();
+  auto rng = inhand_test::make_rng(1511);
+  for (const std::pair<double, double>& gains :
+       {std::pair<double, double>{10.0, 10.0}, {10.0, 3.0}, {2.0, 10.0}, {0.0, 10.0}}) {
+    inhand::PoseFeedback<double> pf;
+    pf.position_integral_gain = gains.first;
+    pf.orientation_integral_gain = gains.second;
+    pf.position_integral_limit = 1.0;  // the norm bounds kept out of play
+    pf.orientation_integral_limit = 1.0;
+    Tw k;
+    k << Eigen::Vector3d::Constant(gains.first), Eigen::Vector3d::Constant(gains.second);
+    for (int c = 0; c < scaled(100); ++c) {
+      const Tw r = inhand_test::random_unit_vector<double, 6>(rng);
+      const Tw d = Tw(k.cwiseProduct(r)).normalized();
+      Tw e = inhand_test::random_vector<double, 6>(rng, -0.01, 0.01);
+      if (d.dot(e) < 0) e = -e;
+      const Pose<double, 3> desired = desired_at(e);
+      Loop held, free;
+      for (int t = 0; t < 50; ++t) {
+        held.update(pf, desired, zero, measured, dt);
+        free.update(pf, desired, zero, measured, dt);
+      }
+      const double along = r.dot(k.cwiseProduct(held.integral()));
+      ASSERT_GT(along, 0.0);
+      for (int t = 0; t < 200; ++t) {
+        const auto step = held.update(pf, desired, zero, measured, dt);
+        held.hold_integral_along(pf, 0.3 * r, step.pose_error, dt);
+        free.update(pf, desired, zero, measured, dt);
+      }
+      const Tw hi = held.integral(), fi = free.integral();
+      const std::string at = "gains " + std::to_string(gains.first) + "/" +
+                             std::to_string(gains.second) + " case " + std::to_string(c);
+      EXPECT_NEAR(r.dot(k.cwiseProduct(hi)), along, 1e-12 * (1 + k.maxCoeff())) << at;
+      EXPECT_GT(r.dot(k.cwiseProduct(fi)), along + 150 * dt * r.dot(k.cwiseProduct(e))) << at;
+      EXPECT_LE((Tw(hi - d.dot(hi) * d) - Tw(fi - d.dot(fi) * d)).norm(), 1e-12) << at;
+      EXPECT_LE(hi.norm(), fi.norm()) << at;
+      // One tick lifts the part along d from -g/2 to +g/2: the give-back stops at zero.
+      // Two ticks below (-2g, lifted to -g): left alone.
+      const Pose<double, 3> away_half = desired_at(Tw(-0.5 * e)), away = desired_at(Tw(-e));
+      Loop lifted, below, below_free;
+      lifted.update(pf, away_half, zero, measured, dt);
+      const auto lift = lifted.update(pf, desired, zero, measured, dt);
+      lifted.hold_integral_along(pf, 0.3 * r, lift.pose_error, dt);
+      EXPECT_NEAR(d.dot(lifted.integral()), 0.0, 1e-15) << at;
+      for (Loop* l : {&below, &below_free}) {
+        l->update(pf, away, zero, measured, dt);
+        l->update(pf, away, zero, measured, dt);
+      }
+      const auto up = below.update(pf, desired, zero, measured, dt);
+      below_free.update(pf, desired, zero, measured, dt);
+      below.hold_integral_along(pf, 0.3 * r, up.pose_error, dt);
+      EXPECT_LT(d.dot(below.integral()), -0.5 * dt * d.dot(e)) << at;
+      EXPECT_TRUE(below.integral() == below_free.integral()) << at;
+      // Away from the cut, nothing removed, or a removed twist that is not finite.
+      for (const Tw& removed :
+           {Tw(-r), Tw(Tw::Zero()), Tw(Tw::Constant(std::numeric_limits<double>::quiet_NaN())),
+            Tw(Tw::Constant(std::numeric_limits<double>::infinity()))}) {
+        Loop a = held, b = held;
+        const auto step = a.update(pf, desired, zero, measured, dt);
+        b.update(pf, desired, zero, measured, dt);
+        a.hold_integral_along(pf, removed, step.pose_error, dt);
+        EXPECT_TRUE(a.integral() == b.integral()) << at;
+      }
     }
   }
 }

@@ -108,17 +108,17 @@ struct ControllerTypes {
     /// object stops at the edge of the hand's workspace instead of being carried on by the
     /// other fingers (which deforms the grasp). false (default): the twist is cut only on
     /// a tick whose force layer reports the grasp at risk (ForceLayerStatus
-    /// beyond_capacity or slipping) and, once cut, for as long as the twist goes on asking
-    /// beyond the edge; otherwise it is left alone, and the held finger rolls or slides on
-    /// the object if it can. While cut, the pose loop does not integrate the error along
-    /// the cut (workspace_limits.hpp).
+    /// beyond_capacity or slipping), for at_risk_hold after the last such tick, and, once
+    /// cut, for as long as the twist goes on asking beyond the edge; otherwise it is left
+    /// alone, and the held finger rolls or slides on the object if it can. While cut, the
+    /// pose loop does not integrate the error along the cut (workspace_limits.hpp).
     bool keep_twist_in_reach = false;
     /// s the cut made while the grasp is at risk stays on after the last tick at risk
-    /// (>= 0; 0: only on those ticks). Once made, the cut also stays on while the twist
-    /// goes on asking beyond the edge; the hold bridges the ticks where it stops asking for
-    /// a tick or two (a held joint's bound reached and left tick by tick) while the two
-    /// flags flicker at their thresholds (gaps of 1-6 ticks). Short against the pose loop's
-    /// time constant (1/8 s).
+    /// (>= 0; 0: no hold). Once made, the cut also stays on while the twist goes on asking
+    /// beyond the edge; the hold bridges the ticks where it stops asking for a tick or two
+    /// (a held joint's bound reached and left tick by tick) while the two flags flicker at
+    /// their thresholds (gaps of 1-6 ticks). Short against the pose loop's time constant
+    /// (1/8 s).
     Scalar at_risk_hold = Scalar(0.05);
     /// start_manipulation() refuses a trajectory whose start pose is farther than this
     /// from the measured object pose (m, and rad of the rotation between them); > 0.

@@ -109,11 +109,13 @@ enum class ControllerWarning : unsigned {
   implausible_contact = 1u << 15,     ///< some contact is far from / behind its fingertip
   joint_position_limited = 1u << 16,  ///< some joint was held at its position limit (IK)
   /// the object twist asks a touching contact to move, along its normal, where a joint
-  /// held at its limit cannot follow (workspace_limits.hpp); cut when keep_twist_in_reach
-  /// or while the force layer reports beyond_capacity or slipping (and at_risk_hold after)
+  /// held at its limit cannot follow (workspace_limits.hpp); cut when keep_twist_in_reach,
+  /// while the force layer reports beyond_capacity or slipping (and at_risk_hold after),
+  /// and, once cut, while the twist goes on asking for it
   workspace_limited = 1u << 17,
   /// with workspace_limited: the commanded twist was cut there this tick, so the object
-  /// does not follow the trajectory's twist (Config::keep_twist_in_reach, at_risk_hold)
+  /// does not follow the trajectory's twist, and the pose loop does not integrate the
+  /// error along the cut (Config::keep_twist_in_reach, at_risk_hold)
   workspace_cut = 1u << 18,
   /// grasp phase: max_force holds the grasp's grip s_g below what release_grip and
   /// release_load ask (grasp.hpp "Release grip"): released, a load of release_load along

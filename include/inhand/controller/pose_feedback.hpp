@@ -81,19 +81,30 @@ class PoseLoop {
   void reset() noexcept { integral_.setZero(); }
   const TwistT& integral() const noexcept { return integral_; }  ///< (m s; rad s)
 
-  /// Conditional integration against a cut made after this loop: `removed` is what a later
-  /// stage took out of this tick's commanded twist (the workspace cut, workspace_limits.hpp),
-  /// `pose_error` this tick's error, dt [s] this tick's. With d the unit direction of
-  /// `removed` (the Euclidean norm of (v; omega) the cut uses), the integral's part along d
-  /// gives back this tick's growth dt (d . e) when that points the way the cut removed,
-  /// never below zero: I <- I - min(dt (d . e), d . I) d when both are > 0. The integral then
-  /// does not wind up against a constraint the twist cannot pass, and its norm never grows
-  /// (what it takes out is at most its own part along d). Otherwise, or with `removed`
-  /// zero or not finite, I is left alone.
-  void hold_integral_along(const TwistT& removed, const TwistT& pose_error, Scalar dt) noexcept {
-    const Scalar r = removed.norm();
+  /// Conditional integration against a cut made after this loop (`pf` as in update()):
+  /// `removed` is what a later stage took out of this tick's commanded twist (the
+  /// workspace cut, workspace_limits.hpp), `pose_error` this tick's error, dt [s] this
+  /// tick's. The integral adds K I to the twist, K = diag(position_integral_gain,
+  /// orientation_integral_gain) per part; d is the unit direction of K `removed` (of
+  /// `removed` itself when the two gains are equal, the defaults), so that d . I holds
+  /// what K I adds along `removed`. The part along d gives back this tick's growth
+  /// dt (d . e) when that points the way the cut removed, never below zero:
+  /// I <- I - min(dt (d . e), d . I) d when both are > 0. The integral then does not wind
+  /// up against a constraint the twist cannot pass, and its norm never grows (what it takes
+  /// out is at most its own part along d). Taken after update()'s norm bounds: on a tick
+  /// that scaled a part to its bound, the part along d may end a little lower than before
+  /// the tick (never below zero). Otherwise, or with `removed` (or K `removed`) zero or not
+  /// finite, I is left alone.
+  void hold_integral_along(const PoseFeedback<Scalar>& pf, const TwistT& removed,
+                           const TwistT& pose_error, Scalar dt) noexcept {
+    constexpr int R = SpatialDim<Dim>::kRot;
+    const Scalar kp = pf.position_integral_gain, ko = pf.orientation_integral_gain;
+    TwistT d = removed;  // K removed, scaled by 1 / max(kp, ko): exact for equal gains
+    if (kp > ko) d.template tail<R>() *= ko / kp;
+    if (ko > kp) d.template head<Dim>() *= kp / ko;
+    const Scalar r = d.norm();
     if (!(r > Scalar(0)) || !is_finite(r)) return;
-    const TwistT d = removed / r;
+    d /= r;
     const Scalar grown = dt * d.dot(pose_error), held = d.dot(integral_);
     if (grown > Scalar(0) && held > Scalar(0)) integral_ -= std::min(grown, held) * d;
   }

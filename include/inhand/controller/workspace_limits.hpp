@@ -118,7 +118,8 @@ ControllerWarning cut_twist_at_edge(const Tick& tick, State& state, Scratch& scr
   state.edge_cut = cut && asked;
   if (!asked) return ControllerWarning::none;
   if (!cut) return ControllerWarning::workspace_limited;
-  state.pose_loop.hold_integral_along(pose.commanded_twist - twist, pose.pose_error, tick.dt);
+  state.pose_loop.hold_integral_along(tick.config.pose_feedback, pose.commanded_twist - twist,
+                                      pose.pose_error, tick.dt);
   return ControllerWarning::workspace_limited | ControllerWarning::workspace_cut;
 }
 
