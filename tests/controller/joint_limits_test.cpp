@@ -267,6 +267,55 @@ TEST(ContactIkPositionLimits, InvalidBoxIsRejected) {
   EXPECT_TRUE(inhand::has(ik.solve(J, x, vmax, lo, hi, qd).status, IkStatus::invalid_input));
 }
 
+/// Every way a box or a velocity limit can be invalid, on every joint, for a fixed-size and a
+/// run-time-bounded solver: -inf < lo <= 0 <= hi < +inf and max_velocity > 0 are required,
+/// NaN fails each; the edges of the valid set (lo = hi = 0, an unlimited velocity) pass.
+template <int N, int MaxN>
+void check_box_validation() {
+  using Ik = inhand::ContactIk<double, 3, N, MaxN>;
+  using JV = typename Ik::JointVector;
+  constexpr int n = 4;
+  Ik ik(n);
+  typename Ik::Jacobian J(3, n);
+  J << 1, 0, 0, 0.5, 0, 1, 0, 0.2, 0, 0, 1, -0.3;
+  const Eigen::Vector3d x(0.01, -0.02, 0.03);
+  const JV vmax0 = JV::Constant(n, 10.0), lo0 = JV::Constant(n, -1.0), hi0 = JV::Constant(n, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  auto status = [&](const JV& vmax, const JV& lo, const JV& hi) {
+    JV qd = JV::Constant(n, 7.0);
+    const auto s = ik.solve(J, x, vmax, lo, hi, qd).status;
+    const bool invalid = inhand::has(s, IkStatus::invalid_input);
+    if (invalid) {
+      EXPECT_TRUE(qd.isZero(0));
+    }
+    return invalid;
+  };
+  EXPECT_FALSE(status(vmax0, lo0, hi0));
+  EXPECT_FALSE(status(JV::Constant(n, inf), JV::Zero(n), JV::Zero(n)));
+  for (int i = 0; i < n; ++i) {
+    for (double bad : {0.5, -inf, nan}) {
+      JV lo = lo0;
+      lo(i) = bad;
+      EXPECT_TRUE(status(vmax0, lo, hi0)) << "lo(" << i << ") = " << bad;
+    }
+    for (double bad : {-0.5, inf, nan}) {
+      JV hi = hi0;
+      hi(i) = bad;
+      EXPECT_TRUE(status(vmax0, lo0, hi)) << "hi(" << i << ") = " << bad;
+    }
+    for (double bad : {0.0, -1.0, -inf, nan}) {
+      JV vmax = vmax0;
+      vmax(i) = bad;
+      EXPECT_TRUE(status(vmax, lo0, hi0)) << "max_velocity(" << i << ") = " << bad;
+    }
+  }
+}
+TEST(ContactIkPositionLimits, EveryInvalidBoxOrLimitIsRejectedOnEveryJoint) {
+  check_box_validation<4, 4>();
+  check_box_validation<Eigen::Dynamic, 6>();
+}
+
 /// Random boxes that hold joints, solved plainly and with the normal weighted: the weighted
 /// solve stays in the box, leaves no more miss along the normal than the plain one (its
 /// objective weighs that miss w^2 times as much, the plain one's is the least unweighted
