@@ -34,7 +34,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 
 #include "inhand/controller/ik_report.hpp"
 #include "inhand/math/box_least_squares.hpp"
@@ -175,17 +174,20 @@ class ContactIk {
   }
 
   /// Velocity limits > 0 (NaN fails), and a box [lo, hi] (if given) of this solver's size,
-  /// finite, with lo <= 0 <= hi: -inf < lo <= 0 <= hi < +inf, which NaN fails too. One
-  /// pass over the joints (the comparisons of a joint combined, not chained).
+  /// finite, with lo <= 0 <= hi. One pass over the joints.
   static bool limits_valid(const JointVector& max_velocity, const JointVector* lo,
                            const JointVector* hi, int n) noexcept {
-    if (max_velocity.size() != n) return false;
-    if (lo == nullptr || hi == nullptr) return (max_velocity.array() > Scalar(0)).all();
-    if (lo->size() != n || hi->size() != n) return false;
-    const Scalar inf = std::numeric_limits<Scalar>::infinity();
-    return ((max_velocity.array() > Scalar(0)) && (lo->array() <= Scalar(0)) &&
-            (lo->array() > -inf) && (hi->array() >= Scalar(0)) && (hi->array() < inf))
-        .all();
+    bool ok = max_velocity.size() == n;
+    const bool boxed = lo != nullptr && hi != nullptr;
+    if (boxed) ok = ok && lo->size() == n && hi->size() == n;
+    if (!ok) return false;
+    for (int i = 0; i < n; ++i) ok = ok && max_velocity(i) > Scalar(0);
+    if (boxed) {
+      for (int i = 0; i < n; ++i)
+        ok = ok && (*lo)(i) <= Scalar(0) && (*hi)(i) >= Scalar(0) && is_finite((*lo)(i)) &&
+             is_finite((*hi)(i));
+    }
+    return ok;
   }
 
   IkParams<Scalar> params_;
