@@ -254,19 +254,6 @@ TEST(ContactIkPositionLimits, SweepNeverCrossesAndKeepsFeasibleSolutions) {
   inhand_test::record("position_limit_sweep_limited", total.limited);
 }
 
-TEST(ContactIkPositionLimits, InvalidBoxIsRejected) {
-  inhand::ContactIk<double, 3, 3> ik;
-  const Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
-  const Eigen::Vector3d x(0.1, 0, 0), vmax = Eigen::Vector3d::Constant(10);
-  Eigen::Vector3d qd, lo = Eigen::Vector3d::Constant(-1), hi = Eigen::Vector3d::Constant(1);
-  lo(1) = 0.5;  // lo > 0: z = 0 would not be feasible
-  EXPECT_TRUE(inhand::has(ik.solve(J, x, vmax, lo, hi, qd).status, IkStatus::invalid_input));
-  EXPECT_EQ(qd, Eigen::Vector3d::Zero());
-  lo(1) = -1;
-  hi(2) = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_TRUE(inhand::has(ik.solve(J, x, vmax, lo, hi, qd).status, IkStatus::invalid_input));
-}
-
 /// Every way a box or a velocity limit can be invalid, on every joint, for a fixed-size and a
 /// run-time-bounded solver: -inf < lo <= 0 <= hi < +inf and max_velocity > 0 are required,
 /// NaN fails each; the edges of the valid set (lo = hi = 0, an unlimited velocity) pass.
@@ -294,7 +281,7 @@ void check_box_validation() {
   EXPECT_FALSE(status(vmax0, lo0, hi0));
   EXPECT_FALSE(status(JV::Constant(n, inf), JV::Zero(n), JV::Zero(n)));
   for (int i = 0; i < n; ++i) {
-    for (double bad : {0.5, -inf, nan}) {
+    for (double bad : {0.5, -inf, nan}) {  // lo > 0: theta_dot = 0 would not be feasible
       JV lo = lo0;
       lo(i) = bad;
       EXPECT_TRUE(status(vmax0, lo, hi0)) << "lo(" << i << ") = " << bad;
