@@ -5,6 +5,7 @@
 // INHAND_TEST_SCALE multiplies the number of manipulation ticks and random patterns.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 #include <string>
 #include <type_traits>
@@ -101,6 +102,13 @@ TYPED_TEST(ControllerContract, ValidationNamesTheFullPathAndConfigureIsAllOrNoth
        [](typename Ctrl::Config& c) { c.outlier_gates.max_force_rate = S(0); }},
       {"grasp.settle_time", -1, [](typename Ctrl::Config& c) { c.grasp.settle_time = S(-1); }},
       {"max_measured_force", -1, [](typename Ctrl::Config& c) { c.max_measured_force = S(0); }},
+      {"min_measured_force", -1, [](typename Ctrl::Config& c) { c.min_measured_force = S(0.1); }},
+      {"min_measured_force", -1,
+       [](typename Ctrl::Config& c) { c.min_measured_force = -2 * c.max_measured_force; }},
+      {"min_measured_force", -1,
+       [](typename Ctrl::Config& c) {
+         c.min_measured_force = std::numeric_limits<S>::quiet_NaN();
+       }},
       {"joints.max_velocity", 1,
        [](typename Ctrl::Config& c) { c.fingers[1].chain.joints[0].max_velocity = S(0); }},
   };

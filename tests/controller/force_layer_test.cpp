@@ -328,6 +328,33 @@ TEST(ForceLayer, LoadBeyondMaxForceIsReported) {
   EXPECT_LE(r.target.maxCoeff(), 6.0 + 1e-9);
 }
 
+/// A touching finger that measures more than max_force (which no target asks for) is
+/// reported with the object free, whichever finger it is; at max_force, on a finger not
+/// touching, or while the grasp holds the object, it is not.
+TEST(ForceLayer, AForceAboveMaxForceIsReportedWhenTheObjectIsFree) {
+  using inhand::ForceLayerStatus;
+  for (int finger = 0; finger < 4; ++finger) {
+    SCOPED_TRACE(finger);
+    auto status = [&](double reading, bool touching, bool free) {
+      Grasp g;
+      g.measured = g.pattern;  // at the pattern: nothing else to report
+      g.measured(finger) = reading;
+      g.touching(finger) = touching ? 1 : 0;
+      Layer layer;
+      Layer::Result r;
+      layer.update(g.step(1e-3, free), r);
+      return r.status;
+    };
+    const double cap = Grasp().step().max_force;
+    EXPECT_TRUE(inhand::has(status(std::nextafter(cap, 1e9), true, true),
+                            ForceLayerStatus::over_max_force));
+    EXPECT_TRUE(inhand::has(status(2 * cap, true, true), ForceLayerStatus::over_max_force));
+    EXPECT_FALSE(inhand::has(status(cap, true, true), ForceLayerStatus::over_max_force));
+    EXPECT_FALSE(inhand::has(status(2 * cap, false, true), ForceLayerStatus::over_max_force));
+    EXPECT_FALSE(inhand::has(status(2 * cap, true, false), ForceLayerStatus::over_max_force));
+  }
+}
+
 /// A ball of radius r (at p_o) rolls without sliding at `speed` m/s along X over a fixed
 /// fingertip below it (contact at p_o - r e_z, outward normal -e_z), for `ticks` ms: its
 /// material point at the contact is at rest. The measured pose carries `noise` (m, and

@@ -1204,10 +1204,10 @@ std::vector<BadInputCase> bad_input_cases() {
          in.fingers[2].contact.normal_force = kNaN;
        },
        InputField::normal_force, 2},
-      {"negative force",
+      {"force below min_measured_force",
        [](In& in, double) {
          in.fingers[2].contact.touching = true;
-         in.fingers[2].contact.normal_force = -0.5;
+         in.fingers[2].contact.normal_force = -1.5;
        },
        InputField::normal_force, 2},
       {"NaN external Jacobian", [](In& in, double) { in.fingers[2].jacobian(1, 2) = kNaN; },
@@ -1569,7 +1569,8 @@ TEST(ReactiveControllerHardening, WronglySizedOutputIsRejectedNotResized) {
   EXPECT_EQ(c.update(in, out), ControllerStatus::grasping);
 }
 
-TEST(ReactiveControllerHardening, EnormousMeasuredForceIsInvalidInputAndNothingOverflows) {
+TEST(ReactiveControllerHardening,
+     MeasuredForceOutsideItsPlausibleRangeIsInvalidInputAndNothingOverflows) {
   Scene<PlanarCtrl> s = planar_scene<PlanarCtrl>();
   PlanarCtrl c;
   PlanarCtrl::Input in;
@@ -1593,6 +1594,22 @@ TEST(ReactiveControllerHardening, EnormousMeasuredForceIsInvalidInputAndNothingO
   EXPECT_EQ(c.update(in, out), ControllerStatus::invalid_input);
   in.fingers[1].contact.normal_force = s.config.max_measured_force;
   EXPECT_NE(c.update(in, out), ControllerStatus::invalid_input);
+  // The same at the lower bound: a reading below zero down to min_measured_force is a
+  // sensor's offset, taken as measured; below it, a fault.
+  ASSERT_LT(s.config.min_measured_force, 0.0);
+  s.plant.advance(out, true);
+  for (const double f : {-1e-3, 0.5 * s.config.min_measured_force, s.config.min_measured_force}) {
+    s.plant.fill(in, true);
+    in.fingers[1].contact.normal_force = f;
+    EXPECT_NE(c.update(in, out), ControllerStatus::invalid_input)
+        << f << " " << inhand::to_string(out.fault.field);
+    s.plant.advance(out, true);
+  }
+  s.plant.fill(in, true);
+  in.fingers[1].contact.normal_force = std::nextafter(s.config.min_measured_force, -kInf);
+  EXPECT_EQ(c.update(in, out), ControllerStatus::invalid_input);
+  EXPECT_EQ(out.fault.field, InputField::normal_force);
+  EXPECT_EQ(out.fault.finger, 1);
 }
 
 TEST(ReactiveControllerHardening, NonFiniteIntermediateGivesNumericalFaultZeroOutputAndOldState) {

@@ -150,6 +150,37 @@ TEST(PlantSensing, GainErrorScalesTheReading) {
   EXPECT_LT(worst, 1e-12);
 }
 
+/// A tactile sensor whose zero is off by -0.1 N reads below zero on a contact carrying
+/// less than 0.1 N: wide campaign seed 983 (a 399 g box released onto the thumb, the first
+/// finger's reading biased by -0.1 N) unloads that finger at release. Such readings are
+/// the sensor's offset, not a fault: every tick is valid (before Config::min_measured_force
+/// four ticks at release were refused as invalid input, each a zero command to the hand),
+/// and the case holds its box within the campaign's bounds.
+TEST(PlantSensing, ABiasedSensorsReadingBelowZeroIsTakenAsMeasured) {
+  namespace cp = inhand::examples::campaign;
+  const cp::Case c = cp::make_case(983, true);
+  long below_zero = 0, refused = 0;
+  double lowest = 0.0;
+  const ip::ScenarioResult r = ip::ScenarioRunner().run(c.spec, [&](const ip::TickRecord& rec) {
+    for (const auto& f : rec.input->fingers) {
+      if (!f.contact.touching || !(f.contact.normal_force < 0.0)) continue;
+      ++below_zero;
+      lowest = std::min(lowest, f.contact.normal_force);
+    }
+    if (rec.status == inhand::ControllerStatus::invalid_input) ++refused;
+  });
+  EXPECT_GT(below_zero, 0) << "the case no longer reads below zero: it tests nothing";
+  EXPECT_GE(lowest, -0.1 - 1e-12);
+  EXPECT_EQ(refused, 0);
+  ASSERT_TRUE(r.failure.empty()) << r.failure;
+  EXPECT_FALSE(r.dropped);
+  EXPECT_EQ(r.contact_losses, 0);
+  ASSERT_FALSE(r.stages.empty());
+  EXPECT_LE(r.stages.back().rms_position_error, cp::kBounds.rms_position_error);
+  EXPECT_LE(r.stages.back().final_position_error, cp::kBounds.final_position_error);
+  inhand_test::record("ticks_read_below_zero", static_cast<double>(below_zero));
+}
+
 /// Three fingers of the three-finger preset's geometry set at 0, 120 and 240 degrees
 /// about the world Z axis: a tripod whose contact normals on a sphere are 120 degrees
 /// apart, far from collinear (the paper's planner cannot balance them; the force layer's

@@ -92,6 +92,14 @@ struct ControllerTypes {
     /// non-finite one: no finger sensor reads ten kilonewtons, and an unbounded force
     /// would overflow the force layer's arithmetic.
     Scalar max_measured_force = Scalar(1e4);
+    /// N, <= 0 and >= -max_measured_force: the lowest plausible reading of a touching
+    /// finger's normal force. A tactile sensor's zero drifts: with an offset of -0.1 N a
+    /// contact carrying less than 0.1 N reads below zero, and such a reading is taken as
+    /// measured (the force layer's loops and load estimate see the offset as they see
+    /// any bias; force_layer.md). A lower reading is invalid input (fault normal_force):
+    /// a contact pulling at the finger by more than the nominal grip is no offset but
+    /// a broken sensor.
+    Scalar min_measured_force = Scalar(-1);
     /// m, > 0 (+inf disables): chain kinematics only. A touching finger's contact is
     /// implausible when the contact point lies farther than this from the fingertip
     /// sphere's surface, | |c - p| - r | > contact_tolerance (c the sphere centre from
@@ -148,6 +156,9 @@ struct ControllerTypes {
           !(c.max_measured_force >= c.force_planner.nominal_force))
         return Validation::invalid("max_measured_force",
                                    "must be finite, > 0 and >= force_planner.nominal_force");
+      if (!is_finite(c.min_measured_force) || !(c.min_measured_force <= Scalar(0)) ||
+          !(c.min_measured_force >= -c.max_measured_force))
+        return Validation::invalid("min_measured_force", "must be <= 0 and >= -max_measured_force");
       if (!(c.contact_tolerance > Scalar(0)) || c.contact_tolerance != c.contact_tolerance)
         return Validation::invalid("contact_tolerance", "must be > 0 (+inf disables)");
       if (!is_finite(c.at_risk_hold) || !(c.at_risk_hold >= Scalar(0)))
@@ -175,7 +186,9 @@ struct ControllerTypes {
     /// Object's outward unit normal: its length must be within 1e-3 of 1 (else invalid
     /// input, fault contact_normal); the controller normalises it.
     Vec normal = Vec::UnitX();
-    Scalar normal_force = Scalar(0);  ///< N, in [0, Config::max_measured_force]
+    /// N, >= 0 for a true contact force; readings in [Config::min_measured_force,
+    /// Config::max_measured_force] are accepted (a sensor's offset may read below 0)
+    Scalar normal_force = Scalar(0);
   };
 
   struct FingerInput {

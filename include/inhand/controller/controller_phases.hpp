@@ -258,6 +258,7 @@ ControllerStatus manipulation_phase(
   if (has(fs, ForceLayerStatus::grip_raised)) w |= ControllerWarning::grip_raised;
   if (has(fs, ForceLayerStatus::beyond_capacity)) w |= ControllerWarning::beyond_capacity;
   if (has(fs, ForceLayerStatus::integral_limited)) w |= ControllerWarning::force_integral_limited;
+  if (has(fs, ForceLayerStatus::over_max_force)) w |= ControllerWarning::over_max_force;
   // Layers 2-3 per finger, the twist kept within reach (workspace_limits.hpp).
   typename Types::TwistT twist = pose.commanded_twist;
   w |= detail::cut_twist_at_edge<Types>(t, st, sc, pose,

@@ -100,10 +100,12 @@ struct ControllerState {
     edge_cut = false;
   }
   /// Whether the twist is cut for the grasp at risk (the force layer's status `fs` says
-  /// beyond_capacity or slipping): on a tick at risk, and for `hold` s after the last one
-  /// (ticks of dt s).
+  /// beyond_capacity, slipping or over_max_force: a load the grip cannot carry, a contact
+  /// sliding, or a contact pressed harder than any target asks): on a tick at risk, and
+  /// for `hold` s after the last one (ticks of dt s).
   bool hold_risk(ForceLayerStatus fs, Scalar hold, Scalar dt) noexcept {
-    const bool at_risk = has(fs, ForceLayerStatus::beyond_capacity | ForceLayerStatus::slipping);
+    const bool at_risk = has(fs, ForceLayerStatus::beyond_capacity | ForceLayerStatus::slipping |
+                                     ForceLayerStatus::over_max_force);
     risk_hold = at_risk ? hold : (risk_hold > dt ? risk_hold - dt : Scalar(0));
     return at_risk || risk_hold > Scalar(0);
   }

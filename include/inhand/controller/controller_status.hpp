@@ -110,8 +110,8 @@ enum class ControllerWarning : unsigned {
   joint_position_limited = 1u << 16,  ///< some joint was held at its position limit (IK)
   /// the object twist asks a touching contact to move, along its normal, where a joint
   /// held at its limit cannot follow (workspace_limits.hpp); cut when keep_twist_in_reach,
-  /// while the force layer reports beyond_capacity or slipping (and at_risk_hold after),
-  /// and, once cut, while the twist goes on asking for it
+  /// while the force layer reports beyond_capacity, slipping or over_max_force (and
+  /// at_risk_hold after), and, once cut, while the twist goes on asking for it
   workspace_limited = 1u << 17,
   /// with workspace_limited: the commanded twist was cut there this tick, so the object
   /// does not follow the trajectory's twist, and the pose loop does not integrate the
@@ -121,6 +121,11 @@ enum class ControllerWarning : unsigned {
   /// release_load ask (grasp.hpp "Release grip"): released, a load of release_load along
   /// some direction may open a contact
   release_grip_capped = 1u << 19,
+  /// manipulation: some touching finger measures more than force_planner.max_force, which
+  /// no force target asks for: the object's motion presses it into the finger (a joint
+  /// held at its limit, a twist faster than the force loop). Counts as the grasp at risk
+  /// for workspace_limited's cut
+  over_max_force = 1u << 20,
 };
 template <>
 struct is_flags<ControllerWarning> : std::true_type {};

@@ -234,17 +234,18 @@ class ForceLayer {
   }
 
  private:
-  /// The grip scale s (file comment), from q_int_ and r_load_; raises the grip flags.
+  /// The grip scale s (file comment), from q_int_ and r_load_; raises the status flags.
   Scalar update_grip(const Step& in, bool slipping, ForceLayerStatus& status) noexcept {
     const ForceLayerParams<Scalar>& p = params_;
     Scalar s_lo = Scalar(1), s_hi = std::numeric_limits<Scalar>::infinity();
-    bool infeasible = false;
+    bool infeasible = false, over_max = false;
     if (in.object_free) {
       const Scalar s_release = in.release_grip > Scalar(0) ? in.release_grip : p.release_grip;
       if (!was_free_) grip_slip_ = std::max(grip_slip_, s_release);
       for (int i = 0; i < n_; ++i) {
         if (!(*in.touching)(i)) continue;
         const Scalar q = q_int_(i), r = r_load_(i);
+        over_max = over_max || (*in.measured)(i) > in.max_force;
         if (q > Scalar(1e-9)) {
           s_lo = std::max(s_lo, (in.min_force - r) / q);
           s_hi = std::min(s_hi, (in.max_force - r) / q);
@@ -278,6 +279,7 @@ class ForceLayer {
     if (s > Scalar(1) + Scalar(1e-6)) status |= ForceLayerStatus::grip_raised;
     if (infeasible) status |= ForceLayerStatus::beyond_capacity;
     if (slipping) status |= ForceLayerStatus::slipping;
+    if (over_max) status |= ForceLayerStatus::over_max_force;
     return s;
   }
 
@@ -290,11 +292,9 @@ class ForceLayer {
   Map map_{};
   ContactMotion<Scalar, Dim, NumFingers> motion_{};
   ForceVector e_, q_int_, r_load_;  ///< per-tick scratch (preallocated)
-  Scalar grip_ = Scalar(1);
-  Scalar grip_slip_ = Scalar(1);
+  Scalar grip_ = Scalar(1), grip_slip_ = Scalar(1);
   Scalar capped_slip_time_ = Scalar(0);  ///< s a finger has slipped with the cap binding
-  bool was_slipping_ = false;
-  bool was_free_ = false;
+  bool was_slipping_ = false, was_free_ = false;
 };
 
 }  // namespace inhand

@@ -86,6 +86,10 @@ enum class ForceLayerStatus : unsigned {
   grip_raised = 1u << 1,       ///< s > 1: the grip is above the nominal pattern
   beyond_capacity = 1u << 2,   ///< the load needs more than max_force (or min_force is unreachable)
   integral_limited = 1u << 3,  ///< some force integrator reached max_integral_velocity
+  /// object free: some touching finger measures more than max_force. No target asks for
+  /// that much (every target is capped at max_force), so the object's motion presses it
+  /// into the finger: the grasp is being deformed (controller_state.hpp, hold_risk)
+  over_max_force = 1u << 4,
 };
 template <>
 struct is_flags<ForceLayerStatus> : std::true_type {};

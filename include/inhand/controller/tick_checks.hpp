@@ -31,8 +31,8 @@ bool input_valid(const typename Types::Config& c, const typename Types::Input& i
     if (f.contact.touching) {
       const Scalar force = f.contact.normal_force;
       acc += zero_sum(f.contact.contact_point) + zero_sum(f.contact.normal) + force * Scalar(0);
-      ok &= (std::abs(f.contact.normal.norm() - Scalar(1)) <= Scalar(1e-3)) & (force >= Scalar(0)) &
-            (force <= c.max_measured_force);
+      ok &= (std::abs(f.contact.normal.norm() - Scalar(1)) <= Scalar(1e-3)) &
+            (force >= c.min_measured_force) & (force <= c.max_measured_force);
     }
     if (fc.kinematics == KinematicsSource::external) {
       ok &= f.jacobian.cols() == fc.chain.dof();
@@ -69,7 +69,7 @@ InputFault check_input(const typename Types::Config& c, const typename Types::In
       if (!all_finite(f.contact.normal) ||
           !(std::abs(f.contact.normal.norm() - Scalar(1)) <= Scalar(1e-3)))
         return {InputField::contact_normal, i};
-      if (!is_finite(f.contact.normal_force) || f.contact.normal_force < Scalar(0) ||
+      if (!is_finite(f.contact.normal_force) || f.contact.normal_force < c.min_measured_force ||
           f.contact.normal_force > c.max_measured_force)
         return {InputField::normal_force, i};
     }
