@@ -188,6 +188,61 @@ TEST(ForceLayer, StiffnessEstimateTakesOutTheObjectsMotion) {
   }
 }
 
+TEST(StiffnessEstimator, PressStiffnessIsTheSecantSinceTheTouchUntilAFitIsTrusted) {
+  // Finger 0 touches at f_touch (the touch's force arrives with no advance measured) and
+  // presses on at 10 N/s into a linear contact, f = f_touch + k a; finger 1 never touches.
+  // The fit keeps the gain's safe side (max_stiffness) for its window; the press
+  // stiffness is the secant k from the first tick the advance exceeds min_excitation,
+  // and the fit itself once trusted -- also after a new touch -- until reset().
+  using Est = inhand::StiffnessEstimator<double, 2>;
+  const Est::Params p{200.0, 1e5, 0.2, 1e-5, 0.9};
+  const double dt = 1e-3, f_touch = 0.05;
+  for (double k : {500.0, 1200.0, 5e4}) {
+    SCOPED_TRACE(k);
+    Est est;
+    est.resize(2);
+    est.reset(p.max_stiffness);
+    Est::Mask touching;
+    touching << 1, 0;
+    est.start(0, f_touch);
+    const double step = 10.0 * dt / k;  // m per tick
+    double a = 0.0;
+    int secant_ticks = 0, fitted_at = -1;
+    for (int t = 0; t < 1000 && fitted_at < 0; ++t) {
+      a += step;
+      Est::ForceVector advance(step, 0.0), measured(f_touch + k * a, 0.0);
+      est.update(p, touching, advance, measured, dt);
+      EXPECT_EQ(est.press()(1), p.max_stiffness);
+      if (est.estimate()(0) != p.max_stiffness) {
+        fitted_at = t;
+      } else if (a > p.min_excitation * (1.0 + 1e-9)) {
+        EXPECT_NEAR(est.press()(0), k, 1e-6 * k) << "tick " << t;
+        ++secant_ticks;
+      } else if (a < p.min_excitation * (1.0 - 1e-9)) {
+        EXPECT_EQ(est.press()(0), p.max_stiffness) << "tick " << t;
+      }
+    }
+    ASSERT_GE(fitted_at, 0) << "the fit was never trusted";
+    EXPECT_GT(secant_ticks, 0);  // the fit waits for its window; the secant does not
+    EXPECT_NEAR(est.estimate()(0), k, 1e-6 * k);
+    EXPECT_EQ(est.press()(0), est.estimate()(0));
+    // A new touch at a higher force that is not pressed further: the fit stands.
+    est.start(0, 2.0);
+    Est::ForceVector advance(0.0, 0.0), measured(2.0, 0.0);
+    est.update(p, touching, advance, measured, dt);
+    EXPECT_EQ(est.press()(0), est.estimate()(0));
+    est.reset(p.max_stiffness);
+    EXPECT_EQ(est.press()(0), p.max_stiffness);
+    // Before any fit, a contact unloading below its touch force has no secant.
+    est.start(0, 1.0);
+    for (int t = 0; t < 100; ++t) {
+      Est::ForceVector back(step, 0.0), lower(0.9, 0.0);
+      est.update(p, touching, back, lower, dt);
+    }
+    EXPECT_EQ(est.press()(0), p.max_stiffness);
+  }
+}
+
 TEST(ForceLayer, LoopConvergesOverContactStiffnessWithSameGains) {
   for (double k : {500.0, 2000.0, 1e4, 5e4}) {
     for (double tau : {0.0, 0.01}) {

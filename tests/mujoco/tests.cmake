@@ -6,6 +6,9 @@
 #                      Shadow-like hands, cylinder and box scenes) against MuJoCo's own
 #                      kinematics (fingertip positions and Jacobians, random configurations)
 #                      and the presets; the open hand clear of the object
+#   mujoco_box         the paper's slender box on the MJCF three-finger hand over its mass
+#                      and the contacts' friction: the hold after release settles within
+#                      the paper files' 1 s
 #   mujoco_cylinder    the paper's cylinder translation in closed loop on the MJCF hand
 #                      (the case with the paper's bounds is disabled: the grasp does not
 #                      complete on MuJoCo yet; the file gives the figures)
@@ -17,7 +20,7 @@
 #                      reading the same files (fingertip positions, random configurations);
 #                      only where inhand::urdf exists (urdfdom found)
 if(mujoco_FOUND AND GTest_FOUND)
-  set(names mujoco_chains mujoco_cylinder)
+  set(names mujoco_box mujoco_chains mujoco_cylinder)
   if(TARGET inhand::urdf)
     list(APPEND names mujoco_urdf)
   endif()

@@ -23,6 +23,14 @@
 // object (with an actuator's lag, or pushing it) has not compressed its contact by its
 // own travel. Noise in the measured pose lowers the fit (min_fit then holds the
 // estimate) rather than biasing it by more than 1 - min_fit.
+// press(): the stiffness the press direction is computed with (joint_servo.hpp,
+// servo_press_direction). The fit's, once one has been trusted since reset(); before
+// that the secant since the touch, (f - f_touch) / a, once a > min_excitation (f_touch:
+// the force at the touch onset, which arrives with no advance measured), clamped like
+// the fit. The loop's gain keeps the safe side until the fit is trusted; the press
+// direction has no safe side, only a best estimate: pressed along the servo's direction
+// alone (the initial max_stiffness) on a soft contact, a grasp stores friction that a
+// fixture holds and lets go at release (docs/force_layer.md, the MuJoCo boxes).
 //
 // SlipDetector: per finger, the contact's slip s = sum((I - n n^T) d) [m] since the touch.
 // Rolling (the object turning on its contacts) moves the contact point along the object
@@ -112,14 +120,21 @@ class StiffnessEstimator {
   };
 
   void resize(int fingers) {
-    for (ForceVector* v : {&stiffness_, &advance_, &m_d_, &m_f_, &m_dd_, &m_df_, &m_ff_, &window_})
+    for (ForceVector* v : {&stiffness_, &press_, &touch_force_, &advance_, &m_d_, &m_f_, &m_dd_,
+                           &m_df_, &m_ff_, &window_})
       v->setZero(fingers);
+    fitted_.setZero(fingers);
   }
-  /// Every estimate back to `initial` [N/m].
-  void reset(Scalar initial) noexcept { stiffness_.setConstant(initial); }
+  /// Every estimate back to `initial` [N/m], none fitted.
+  void reset(Scalar initial) noexcept {
+    stiffness_.setConstant(initial);
+    press_.setConstant(initial);
+    fitted_.setZero();
+  }
 
-  /// Touch onset of finger i, first measured force f [N]: a fresh fit.
+  /// Touch onset of finger i, first measured force f [N]: a fresh fit (and secant).
   void start(int i, Scalar f) noexcept {
+    touch_force_(i) = f;
     advance_(i) = Scalar(0);
     m_d_(i) = Scalar(0);
     m_f_(i) = f;
@@ -150,15 +165,24 @@ class StiffnessEstimator {
       if (window_(i) >= p.window && var > p.min_excitation * p.min_excitation && cov > Scalar(0) &&
           cov * cov >= p.min_fit * var * var_f) {
         const Scalar k = cov / var;
-        if (is_finite(k)) stiffness_(i) = std::min(p.max_stiffness, std::max(p.min_stiffness, k));
+        if (is_finite(k)) {
+          stiffness_(i) = std::min(p.max_stiffness, std::max(p.min_stiffness, k));
+          fitted_(i) = 1;
+        }
       }
+      if (fitted_(i) != 0)
+        press_(i) = stiffness_(i);
+      else if (d > p.min_excitation && f > touch_force_(i))  // d > 0: finite or +inf
+        press_(i) = std::min(p.max_stiffness, std::max(p.min_stiffness, (f - touch_force_(i)) / d));
     }
   }
 
   const ForceVector& estimate() const noexcept { return stiffness_; }  ///< [N/m]
+  const ForceVector& press() const noexcept { return press_; }         ///< [N/m], see above
 
  private:
-  ForceVector stiffness_, advance_, m_d_, m_f_, m_dd_, m_df_, m_ff_, window_;
+  ForceVector stiffness_, press_, touch_force_, advance_, m_d_, m_f_, m_dd_, m_df_, m_ff_, window_;
+  Mask fitted_;  ///< a fit trusted since reset()
 };
 
 template <typename Scalar, int Dim, int NumFingers>

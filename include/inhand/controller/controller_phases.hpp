@@ -90,7 +90,7 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   if (force_active)  // stores a force along n through servo and contact (joint_servo.hpp)
     force = -sc.forces.velocity(i) *
             servo_press_direction<Scalar, Types::kDim>(m.jacobian, sc.normals.col(i),
-                                                       st.forces.stiffness_estimate()(i),
+                                                       st.forces.press_stiffness()(i),
                                                        t.config.force_layer.servo_stiffness);
   const ControllerWarning w = sc.fingers[static_cast<std::size_t>(i)].layer3.command(
       m.layer3, m.jacobian, f.joint_positions, v, f.contact.normal, force_active ? &force : nullptr,

@@ -147,14 +147,14 @@ class ForceLayer {
     was_touching_.setZero();
     motion_.reset();
     grip_slip_ = Scalar(1);
-    was_slipping_ = false;
-    was_free_ = false;
+    was_slipping_ = was_free_ = false;
     capped_slip_time_ = Scalar(0);
   }
 
   const ForceVector& stiffness_estimate() const noexcept { return stiffness_.estimate(); }
-  /// Integrator states z_i [N s] (internal by construction).
-  const ForceVector& integral() const noexcept { return z_; }
+  /// The contact stiffness [N/m] for the press direction (StiffnessEstimator::press()).
+  const ForceVector& press_stiffness() const noexcept { return stiffness_.press(); }
+  const ForceVector& integral() const noexcept { return z_; }  ///< z_i [N s], internal
 
   /// One tick. Inputs must be finite (the controller checks them); dt > 0.
   void update(const Step& in, Result& out) noexcept {
