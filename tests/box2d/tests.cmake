@@ -11,8 +11,7 @@ if(box2d_FOUND AND nlohmann_json_FOUND AND GTest_FOUND)
     ${CMAKE_CURRENT_SOURCE_DIR} ${PROJECT_SOURCE_DIR}/examples ${PROJECT_SOURCE_DIR}/examples/box2d)
   target_link_libraries(box2d_planar_scenarios PRIVATE inhand::sim inhand_test_instances inhand_warnings box2d::box2d
                         nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
-  gtest_discover_tests(box2d_planar_scenarios DISCOVERY_TIMEOUT 60 TEST_PREFIX box2d.
-                       PROPERTIES LABELS box2d TIMEOUT 120)
+  inhand_add_gtest(box2d_planar_scenarios PREFIX box2d. LABELS box2d TIMEOUT 120)
 
   # Bit-for-bit determinism of the program's output: two runs, byte-identical traces.
   # (Examples are added after the tests, so the target cannot be tested for here; the

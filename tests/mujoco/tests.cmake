@@ -32,8 +32,7 @@ if(mujoco_FOUND AND GTest_FOUND)
       INHAND_TEST_DATA_DIR="${CMAKE_CURRENT_LIST_DIR}/data")
     target_link_libraries(${name} PRIVATE inhand::sim inhand_test_instances inhand_warnings mujoco::mujoco
                           GTest::gtest GTest::gtest_main)
-    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_PREFIX mujoco.
-                         PROPERTIES LABELS mujoco TIMEOUT 120)
+    inhand_add_gtest(${name} PREFIX mujoco. LABELS mujoco TIMEOUT 120)
   endforeach()
   if(TARGET inhand::urdf)
     target_link_libraries(mujoco_urdf PRIVATE inhand::urdf)
@@ -46,7 +45,6 @@ if(mujoco_FOUND AND GTest_FOUND)
       INHAND_MODELS_DIR="${PROJECT_SOURCE_DIR}/models")
     target_link_libraries(mujoco_scenario_file PRIVATE inhand::sim mujoco::mujoco
       nlohmann_json::nlohmann_json inhand_warnings GTest::gtest GTest::gtest_main)
-    gtest_discover_tests(mujoco_scenario_file DISCOVERY_TIMEOUT 60 TEST_PREFIX mujoco.
-                         PROPERTIES LABELS mujoco TIMEOUT 60)
+    inhand_add_gtest(mujoco_scenario_file PREFIX mujoco. LABELS mujoco TIMEOUT 60)
   endif()
 endif()

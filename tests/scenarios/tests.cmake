@@ -23,8 +23,8 @@ if(GTest_FOUND AND nlohmann_json_FOUND)
     nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
   target_compile_definitions(scenarios_scenario_json_check PRIVATE
     INHAND_SCENARIO_DIR="${INHAND_SCENARIOS_DIR}" INHAND_README="${PROJECT_SOURCE_DIR}/docs/scenarios.md")
-  gtest_discover_tests(scenarios_scenario_json_check DISCOVERY_TIMEOUT 60
-    WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR} PROPERTIES LABELS scenarios)
+  inhand_add_gtest(scenarios_scenario_json_check LABELS scenarios
+                   WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
 endif()
 
 # The runs need the inhand_scenario program (examples are added after the tests, so
