@@ -59,6 +59,12 @@ if(INHAND_HAVE_SCENARIO_RUNNER)
     if(name MATCHES "_600s$")
       list(APPEND labels long)
     endif()
+    # Label `other_axes`: a paper task along or about y or z whose file along or about x is
+    # in the same directory (the same hand, object, plant and code path; only the numbers
+    # differ). The sanitizer stage runs the x files only.
+    if(name MATCHES "_(rotate|translate)_[yz]$")
+      list(APPEND labels other_axes)
+    endif()
     set_tests_properties(scenario.${group}.${name} PROPERTIES LABELS "${labels}" TIMEOUT 600)
     if(name MATCHES "_600s$")
       # Started first by a parallel ctest (descending COST, where no earlier run's timings
