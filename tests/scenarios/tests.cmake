@@ -23,8 +23,7 @@ if(GTest_FOUND AND nlohmann_json_FOUND)
     nlohmann_json::nlohmann_json GTest::gtest GTest::gtest_main)
   target_compile_definitions(scenarios_scenario_json_check PRIVATE
     INHAND_SCENARIO_DIR="${INHAND_SCENARIOS_DIR}" INHAND_README="${PROJECT_SOURCE_DIR}/docs/scenarios.md")
-  inhand_add_gtest(scenarios_scenario_json_check LABELS scenarios
-                   WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
+  inhand_add_gtest(scenarios_scenario_json_check LABELS scenarios)
 endif()
 
 # The runs need the inhand_scenario program (examples are added after the tests, so
@@ -63,7 +62,10 @@ if(INHAND_HAVE_SCENARIO_RUNNER)
     # in the same directory (the same hand, object, plant and code path; only the numbers
     # differ). The sanitizer stage runs the x files only.
     if(name MATCHES "_(rotate|translate)_[yz]$")
-      list(APPEND labels other_axes)
+      string(REGEX REPLACE "_[yz]\\.json$" "_x.json" x_file "${file}")
+      if(EXISTS "${x_file}")
+        list(APPEND labels other_axes)
+      endif()
     endif()
     set_tests_properties(scenario.${group}.${name} PROPERTIES LABELS "${labels}" TIMEOUT 600)
     if(name MATCHES "_600s$")
