@@ -9,8 +9,9 @@
 //
 // Each property is a plain function of a DlsProbe (the solver behind an interface in
 // double), compiled once and run by one typed test per shape; per shape, only the
-// solver's own code is compiled (GCC 12 -O3: 49 s for this file, 60 s with every
-// property's body compiled per shape).
+// solver's calls and the conversions to and from the shape's types are compiled (GCC 12
+// -O3, the file compiled alone: 171 s for the 18 shapes, 55 s with one shape, 62 s
+// with two).
 #include "inhand/math/damped_least_squares.hpp"
 
 #include <gtest/gtest.h>
