@@ -203,6 +203,7 @@ inline OutlierGates<double> box2d_outlier_gates() {
   g.max_object_speed = 0.2 * kLengthScale;  // 20 u/s
   g.max_object_angular_speed = 5.0;
   g.max_force_rate = 200.0;
+  g.contact_stiffness = 1e5 / kLengthScale;  // N/u, the library default's 1e5 N/m
   g.max_consecutive_rejections = 5;
   return g;
 }

@@ -156,6 +156,7 @@ inline examples::Json summary_document(const ScenarioSpec& spec, const ScenarioR
     j["outlier_gates"] = {{"max_object_speed_u_per_s", g.max_object_speed},
                           {"max_object_angular_speed_rad_per_s", g.max_object_angular_speed},
                           {"max_force_rate_N_per_s", g.max_force_rate},
+                          {"contact_stiffness_N_per_u", g.contact_stiffness},
                           {"max_consecutive_rejections", g.max_consecutive_rejections}};
     j["faults"] = faults_json(spec, r);
   }

@@ -286,6 +286,8 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     og.max_object_angular_speed = o.limit("max_object_angular_speed", og.max_object_angular_speed,
                                           Range::positive_up_to(1e6));
     og.max_force_rate = o.limit("max_force_rate", og.max_force_rate, Range::positive_up_to(1e9));
+    og.contact_stiffness =
+        o.number("contact_stiffness", og.contact_stiffness, Range::non_negative_up_to(1e9));
     og.max_consecutive_rejections = static_cast<int>(
         o.integer("max_consecutive_rejections", og.max_consecutive_rejections, 0, 1000000));
     o.finish();

@@ -3,8 +3,8 @@
 // term), ContactIk::pseudo_inverse and HybridServo::update, for fixed-size fingers (planar 2 and 3
 // DOF, spatial 3, 4 and 5 DOF) and the run-time bounded finger (Dynamic, MaxDof = 5), float and
 // double; and the whole ReactiveController::update() of the Shadow-like hand on the analytic plant
-// (grasp, release, hold under gravity, a translation: every force-layer branch), with bounded and
-// with run-time DOF storage; and the analytic plant's own per-tick calls.
+// (grasp, release, hold under gravity, a translation: every force-layer branch; the outlier gates
+// on), with bounded and with run-time DOF storage; and the analytic plant's own per-tick calls.
 //
 // One counter, fed at the bottom of every allocation path, guards the loop: the link of
 // this executable wraps the C allocation functions (tests/CMakeLists.txt: the linker's
@@ -260,6 +260,11 @@ long whole_tick_allocations(long& ticks) {
                                                : inhand::FingerRole::preset;
     cfg.fingers.push_back(f);
   }
+  // The outlier gates on (the fault files' bounds), so that their per-tick work, the
+  // force gate's credit for each finger's step, is inside the counted region too.
+  cfg.outlier_gates.max_object_speed = 0.2;
+  cfg.outlier_gates.max_object_angular_speed = 5.0;
+  cfg.outlier_gates.max_force_rate = 200.0;
   Controller c;
   EXPECT_TRUE(c.configure(cfg).ok());
   for (int i = 0; i < plant.finger_count(); ++i)

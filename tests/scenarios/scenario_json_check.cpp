@@ -166,7 +166,7 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   j["controller"] = ex::parse_json_text(R"({"control_period": 2e-3, "max_tick": 0.02,
       "max_joint_acceleration": 300, "keep_twist_in_reach": true, "at_risk_hold": 0.2,
       "outlier_gates": {"max_object_speed": 0.4, "max_object_angular_speed": 8, "max_force_rate": 200,
-                        "max_consecutive_rejections": 3},
+                        "contact_stiffness": 5000, "max_consecutive_rejections": 3},
       "pose_feedback": {"position_gain": 6, "orientation_gain": 7, "max_linear_speed": 0.04,
                         "max_angular_speed": 0.9, "position_integral_gain": 9,
                         "orientation_integral_gain": 11, "position_integral_limit": 1e-3,
@@ -226,6 +226,7 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   EXPECT_EQ(c.outlier_gates.max_object_speed, 0.4);
   EXPECT_EQ(c.outlier_gates.max_object_angular_speed, 8);
   EXPECT_EQ(c.outlier_gates.max_force_rate, 200);
+  EXPECT_EQ(c.outlier_gates.contact_stiffness, 5000);
   EXPECT_EQ(c.outlier_gates.max_consecutive_rejections, 3);
   using FK = ip::FaultSpec::Kind;
   ASSERT_EQ(s.faults.size(), 5u);
@@ -470,6 +471,7 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
   EXPECT_EQ(c.outlier_gates.max_object_speed, dc.outlier_gates.max_object_speed);
   EXPECT_EQ(c.outlier_gates.max_object_angular_speed, dc.outlier_gates.max_object_angular_speed);
   EXPECT_EQ(c.outlier_gates.max_force_rate, dc.outlier_gates.max_force_rate);
+  EXPECT_EQ(c.outlier_gates.contact_stiffness, dc.outlier_gates.contact_stiffness);
   EXPECT_EQ(c.outlier_gates.max_consecutive_rejections,
             dc.outlier_gates.max_consecutive_rejections);
   EXPECT_TRUE(got.faults.empty());

@@ -45,6 +45,22 @@ struct FingerMemory {
   ForceGate<Scalar> force_gate{};
   Vec last_contact_object = Vec::Zero();  ///< m, last contact point, object frame
   Vec last_normal_object = Vec::UnitX();  ///< last outward normal, object frame
+  /// Gates this tick's normal-force reading of finger input `f` (ForceGate), crediting
+  /// the fingertip's measured step into the object over the last tick, -n . J (q - q_prev)
+  /// through the last tick's Jacobian, times g.contact_stiffness. Returns true when the
+  /// reading was rejected. Reads the last tick's Jacobian and joint positions, before
+  /// the force layer moves them on.
+  bool gate_force(const OutlierGates<Scalar>& g, const typename Types::FingerInput& f,
+                  Scalar dt) noexcept {
+    const typename Types::TactileContact& c = f.contact;
+    Scalar into = Scalar(0);  // m
+    if (c.touching && has_q_prev && g.max_force_rate < std::numeric_limits<Scalar>::infinity()) {
+      const Vec n = c.normal.normalized();
+      for (Eigen::Index j = 0; j < jacobian.cols(); ++j)
+        into -= n.dot(jacobian.col(j)) * (f.joint_positions(j) - q_prev(j));
+    }
+    return force_gate.update(g, c.touching, c.normal_force, g.contact_stiffness * into, dt);
+  }
   /// Keeps contact c (world frame) in the object frame of `object`.
   void remember_contact(const typename Types::TactileContact& c,
                         const typename Types::PoseT& object) noexcept {

@@ -204,12 +204,10 @@ class ReactiveController {
     const typename PoseGate<Scalar, Dim>::Step gated =
         state_.pose_gate.update(config_.outlier_gates, in.object_pose, dt, !state_.has_time);
     if (gated.outlier) out.warnings |= ControllerWarning::pose_outlier;
-    for (int i = 0; i < n; ++i) {
-      const TactileContact& c = in.fingers[static_cast<std::size_t>(i)].contact;
-      if (state_.fingers[static_cast<std::size_t>(i)].force_gate.update(
-              config_.outlier_gates, c.touching, c.normal_force, dt))
+    for (int i = 0; i < n; ++i)
+      if (state_.fingers[static_cast<std::size_t>(i)].gate_force(
+              config_.outlier_gates, in.fingers[static_cast<std::size_t>(i)], dt))
         out.warnings |= ControllerWarning::force_outlier;
-    }
     state_.has_time = true;
 
     ControllerStatus status = ControllerStatus::idle;

@@ -4,6 +4,7 @@
 // noexcept, no allocation.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -20,11 +21,21 @@ namespace inhand {
 /// `max_consecutive_rejections` rejections in a row the sample is accepted anyway, so
 /// a real jump (the object was knocked) is followed after that many ticks. Contacts
 /// that (re)start touching are always accepted. +infinity (the default) disables a gate.
+/// A force changes when the finger itself presses or withdraws: the force gate credits
+/// the change the finger's own measured motion explains (contact_stiffness times the
+/// fingertip's step into the object since the last accepted reading, ForceGate) and
+/// bounds only the rest by max_force_rate, so the controller's own press is never
+/// rejected as an outlier, at any loop rate.
 template <typename Scalar>
 struct OutlierGates {
   Scalar max_object_speed = std::numeric_limits<Scalar>::infinity();          ///< m/s
   Scalar max_object_angular_speed = std::numeric_limits<Scalar>::infinity();  ///< rad/s
   Scalar max_force_rate = std::numeric_limits<Scalar>::infinity();            ///< N/s
+  /// N/m, >= 0 and finite: the stiffest contact the force gate expects. A change of the
+  /// reading up to this times the fingertip's measured step into the object (along the
+  /// contact normal, through the last tick's Jacobian) is the finger's own doing, not an
+  /// outlier. 0: the rate bound alone. The default is force_layer.max_stiffness's.
+  Scalar contact_stiffness = Scalar(1e5);
   int max_consecutive_rejections = 5;
   Validation validate() const noexcept {
     if (!(max_object_speed > Scalar(0)) || max_object_speed != max_object_speed)
@@ -35,6 +46,9 @@ struct OutlierGates {
                                  "must be > 0 (+inf disables)");
     if (!(max_force_rate > Scalar(0)) || max_force_rate != max_force_rate)
       return Validation::invalid("outlier_gates.max_force_rate", "must be > 0 (+inf disables)");
+    if (!(contact_stiffness >= Scalar(0)) ||
+        !(contact_stiffness < std::numeric_limits<Scalar>::infinity()))
+      return Validation::invalid("outlier_gates.contact_stiffness", "must be >= 0 and finite");
     if (max_consecutive_rejections < 0)
       return Validation::invalid("outlier_gates.max_consecutive_rejections", "must be >= 0");
     return Validation::valid();
@@ -96,24 +110,35 @@ class ForceGate {
     valid_ = false;
     rejections_ = 0;
   }
-  /// One tick. A finger that does not touch clears the gate (the next touch is accepted
-  /// as it comes). Returns true when the reading was rejected (an outlier).
-  bool update(const OutlierGates<Scalar>& g, bool touching, Scalar reading, Scalar dt) noexcept {
+  /// One tick, dt [s] since the last one. `credit` [N], signed: the change of the reading
+  /// the finger's own motion over this tick explains (contact_stiffness times the
+  /// fingertip's step into the object; > 0 pressed in, < 0 withdrawn). The change since
+  /// the last accepted reading is accepted when it lies within [min(0, C), max(0, C)]
+  /// widened by max_force_rate times the time elapsed since then, C the credit summed
+  /// over that time. A finger that does not touch clears the gate (the next touch is
+  /// accepted as it comes). Returns true when the reading was rejected (an outlier).
+  bool update(const OutlierGates<Scalar>& g, bool touching, Scalar reading, Scalar credit,
+              Scalar dt) noexcept {
     if (!touching) {
       valid_ = false;
       return false;
     }
     const Scalar elapsed = age_ + dt;
-    const bool ok = !valid_ || std::abs(reading - force_) <= g.max_force_rate * elapsed ||
-                    rejections_ >= g.max_consecutive_rejections;
+    const Scalar credited = credit_ + credit;
+    const Scalar change = reading - force_;
+    const Scalar allowed = g.max_force_rate * elapsed;
+    const bool ok = !valid_ || rejections_ >= g.max_consecutive_rejections ||
+                    (change <= std::max(Scalar(0), credited) + allowed &&
+                     change >= std::min(Scalar(0), credited) - allowed);
     if (ok) {
       force_ = reading;
       valid_ = true;
       rejections_ = 0;
-      age_ = Scalar(0);
+      age_ = credit_ = Scalar(0);
     } else {
       ++rejections_;
       age_ = elapsed;
+      credit_ = credited;
     }
     return !ok;
   }
@@ -123,7 +148,8 @@ class ForceGate {
   Scalar force_ = Scalar(0);
   bool valid_ = false;
   int rejections_ = 0;
-  Scalar age_ = Scalar(0);  ///< s since the last accepted force
+  Scalar age_ = Scalar(0);     ///< s since the last accepted force
+  Scalar credit_ = Scalar(0);  ///< N, the credit summed since the last accepted force
 };
 
 }  // namespace inhand
