@@ -23,7 +23,7 @@
 // the measured forces are f_m = P_r f_m + s P_int q: the load share plus the grip.
 //
 // A loop that does not scale with the contact stiffness. Each finger's loop is
-//   u_i = (w_c / k_i) (e_i + w_i z_i),   z_i' = e_i   (z kept internal, bounded)
+//   u_i = (w_c / k_i) (e_i + w_i z_i),   z_i' = e_i   (z kept internal, bounded; force_loop.hpp)
 // with k_i [N/m] the online estimate of the contact stiffness (StiffnessEstimator,
 // contact_observers.hpp; max_stiffness until the fit is trusted). A joint servo in series
 // (servo_stiffness, servo_damping) adds its stiffness in series and its damping as a
@@ -67,6 +67,7 @@
 
 #include "inhand/controller/contact_observers.hpp"
 #include "inhand/controller/force_layer_params.hpp"
+#include "inhand/controller/force_loop.hpp"
 #include "inhand/controller/grasp_map.hpp"
 #include "inhand/controller/joint_servo.hpp"
 #include "inhand/math/types.hpp"
@@ -215,22 +216,19 @@ class ForceLayer {
       z_(i) = t ? z_(i) + dt * e_(i) : Scalar(0);
     }
     if (in.object_free) map_.project_internal(z_);
-    bool limited = false;
+    // Each loop's command and its limits (force_loop.hpp): max_force bounds the press
+    // while the object is held.
+    const Scalar bound = in.object_free ? std::numeric_limits<Scalar>::infinity() : in.max_force;
     for (int i = 0; i < n_; ++i) {
       if (!touching(i)) continue;
       const Scalar kp =
           force_loop_gain(stiffness_.estimate()(i), in.servo_gain ? (*in.servo_gain)(i) : Scalar(0),
                           p.bandwidth, p.contact_damping, p.servo_stiffness, p.servo_damping);
-      const Scalar zmax = p.integral_corner > Scalar(0)
-                              ? p.max_integral_velocity / (kp * p.integral_corner)
-                              : Scalar(0);
-      if (std::abs(z_(i)) > zmax) {
-        z_(i) = z_(i) > Scalar(0) ? zmax : -zmax;
-        limited = limited || p.integral_corner > Scalar(0);
-      }
-      out.velocity(i) = kp * (e_(i) + p.integral_corner * z_(i));
+      const ForceLoopCommand<Scalar> c = force_loop_command(
+          kp, e_(i), z_(i), p.integral_corner, p.max_integral_velocity, (*in.measured)(i), bound);
+      out.velocity(i) = c.velocity;
+      if (c.integral_limited) out.status |= ForceLayerStatus::integral_limited;
     }
-    if (limited) out.status |= ForceLayerStatus::integral_limited;
   }
 
  private:
