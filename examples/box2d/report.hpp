@@ -157,7 +157,7 @@ inline examples::Json summary_document(const ScenarioSpec& spec, const ScenarioR
                           {"max_object_angular_speed_rad_per_s", g.max_object_angular_speed},
                           {"max_force_rate_N_per_s", g.max_force_rate},
                           {"contact_stiffness_N_per_u", g.contact_stiffness},
-                          {"max_consecutive_rejections", g.max_consecutive_rejections}};
+                          {"max_rejection_time_s", g.max_rejection_time}};
     j["faults"] = faults_json(spec, r);
   }
   return j;

@@ -288,8 +288,11 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     og.max_force_rate = o.limit("max_force_rate", og.max_force_rate, Range::positive_up_to(1e9));
     og.contact_stiffness =
         o.number("contact_stiffness", og.contact_stiffness, Range::non_negative_up_to(1e9));
-    og.max_consecutive_rejections = static_cast<int>(
-        o.integer("max_consecutive_rejections", og.max_consecutive_rejections, 0, 1000000));
+    if (o.has("max_consecutive_rejections"))
+      throw JsonError(o.key_path("max_consecutive_rejections"),
+                      "replaced by max_rejection_time, in seconds (5 ticks at 1 kHz: 0.005)");
+    og.max_rejection_time =
+        o.number("max_rejection_time", og.max_rejection_time, Range::non_negative_up_to(1e3));
     o.finish();
   }
   {

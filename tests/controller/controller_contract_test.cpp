@@ -106,6 +106,12 @@ TYPED_TEST(ControllerContract, ValidationNamesTheFullPathAndConfigureIsAllOrNoth
        [](typename Ctrl::Config& c) {
          c.outlier_gates.contact_stiffness = std::numeric_limits<S>::infinity();
        }},
+      {"outlier_gates.max_rejection_time", -1,
+       [](typename Ctrl::Config& c) { c.outlier_gates.max_rejection_time = S(-1e-3); }},
+      {"outlier_gates.max_rejection_time", -1,
+       [](typename Ctrl::Config& c) {
+         c.outlier_gates.max_rejection_time = std::numeric_limits<S>::infinity();
+       }},
       {"grasp.settle_time", -1, [](typename Ctrl::Config& c) { c.grasp.settle_time = S(-1); }},
       {"max_measured_force", -1, [](typename Ctrl::Config& c) { c.max_measured_force = S(0); }},
       {"min_measured_force", -1, [](typename Ctrl::Config& c) { c.min_measured_force = S(0.1); }},

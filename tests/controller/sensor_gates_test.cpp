@@ -1,9 +1,9 @@
 // Properties of the sensor gates (controller/sensor_gates.hpp): a force spike is rejected
-// and the last accepted reading held; a real jump is followed after
-// max_consecutive_rejections; a change the finger's own press or withdrawal explains
-// (the credit) is accepted at any tick length, with its sign; credit and time add up over
-// rejected ticks; a new touch is accepted as it comes; the pose gate's speed bounds.
-// float and double.
+// and the last accepted reading held; a real jump is followed once the reading has been
+// held for max_rejection_time, at any tick length and with jitter; a change the finger's own press
+// or withdrawal explains (the credit) is accepted at any tick length, with its sign; credit and
+// time add up over rejected ticks; a new touch is accepted as it comes; the pose gate's speed
+// bounds. float and double.
 #include "inhand/controller/sensor_gates.hpp"
 
 #include <gtest/gtest.h>
@@ -24,7 +24,7 @@ class SensorGates : public ::testing::Test {
     OutlierGates<S> g;
     g.max_force_rate = S(200);  // N/s: 0.2 N per 1 ms tick
     g.contact_stiffness = S(1e4);
-    g.max_consecutive_rejections = 3;
+    g.max_rejection_time = S(3e-3);  // s: 3 ticks at 1 kHz
     return g;
   }
 };
@@ -43,22 +43,53 @@ TYPED_TEST(SensorGates, SpikeOnAStillFingerIsRejectedAndTheReadingHeld) {
   EXPECT_EQ(gate.force(), S(1.2));
 }
 
-TYPED_TEST(SensorGates, ARealJumpIsFollowedAfterTheRejectionCount) {
+// The hold is max_rejection_time (3 ms) rounded to whole ticks: held while the time since
+// the last accepted reading is below 3 ms + dt / 2.
+TYPED_TEST(SensorGates, ARealJumpIsFollowedAfterTheHoldTimeAtAnyRate) {
+  using S = TypeParam;
+  const OutlierGates<S> g = this->gates();
+  struct Rate {
+    S dt;
+    int held;
+  };
+  for (const Rate r : {Rate{S(5e-4), 6}, Rate{S(1e-3), 3}, Rate{S(2e-3), 1}, Rate{S(1e-2), 0}}) {
+    ForceGate<S> gate;
+    gate.update(g, true, S(1), S(0), r.dt);
+    PoseGate<S, 3> pose_gate;
+    typename PoseGate<S, 3>::PoseT p{};
+    OutlierGates<S> pg = g;
+    pg.max_object_speed = S(0.2);
+    pose_gate.update(pg, p, r.dt, true);
+    p.position.x() = S(0.01);  // the object knocked 1 cm
+    for (int k = 0; k < r.held; ++k) {
+      EXPECT_TRUE(gate.update(g, true, S(5), S(0), r.dt)) << r.dt << " " << k;
+      EXPECT_EQ(gate.force(), S(1));
+      EXPECT_TRUE(pose_gate.update(pg, p, r.dt, false).outlier) << r.dt << " " << k;
+    }
+    EXPECT_FALSE(gate.update(g, true, S(5), S(0), r.dt)) << r.dt;
+    EXPECT_EQ(gate.force(), S(5));
+    EXPECT_FALSE(pose_gate.update(pg, p, r.dt, false).outlier) << r.dt;
+    EXPECT_EQ(pose_gate.pose().position.x(), S(0.01));
+  }
+}
+
+// Ticks of 0.7 and 1.3 ms alternating: the hold is counted in time, not ticks (held at
+// 0.7, 2.0 and 2.7 ms, followed at 4.0 ms).
+TYPED_TEST(SensorGates, TheHoldIsCountedInTimeUnderJitter) {
   using S = TypeParam;
   const OutlierGates<S> g = this->gates();
   ForceGate<S> gate;
   gate.update(g, true, S(1), S(0), S(1e-3));
-  for (int k = 0; k < g.max_consecutive_rejections; ++k) {
-    EXPECT_TRUE(gate.update(g, true, S(5), S(0), S(1e-3))) << k;
-    EXPECT_EQ(gate.force(), S(1));
-  }
-  EXPECT_FALSE(gate.update(g, true, S(5), S(0), S(1e-3)));
+  const S dts[] = {S(7e-4), S(1.3e-3), S(7e-4), S(1.3e-3)};
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(gate.update(g, true, S(5), S(0), dts[k])) << k;
+  EXPECT_FALSE(gate.update(g, true, S(5), S(0), dts[3]));
   EXPECT_EQ(gate.force(), S(5));
 }
 
 TYPED_TEST(SensorGates, TheFingersOwnPressIsCreditedAtAnyTickLength) {
   using S = TypeParam;
-  const OutlierGates<S> g = this->gates();
+  OutlierGates<S> g = this->gates();
+  g.max_rejection_time = S(0.05);  // s: a hold of one tick or more at every rate below
   for (const S dt : {S(5e-4), S(1e-3), S(1e-2), S(2e-2)}) {
     ForceGate<S> gate;
     gate.update(g, true, S(1), S(0), dt);
@@ -83,7 +114,7 @@ TYPED_TEST(SensorGates, TheFingersOwnPressIsCreditedAtAnyTickLength) {
 TYPED_TEST(SensorGates, CreditAndTimeAddUpOverRejectedTicks) {
   using S = TypeParam;
   OutlierGates<S> g = this->gates();
-  g.max_consecutive_rejections = 10;
+  g.max_rejection_time = S(0.01);
   ForceGate<S> gate;
   gate.update(g, true, S(1), S(0), S(1e-3));
   // A spike on a still finger, then a press of 1 N per tick: after the spike is rejected
@@ -143,6 +174,13 @@ TYPED_TEST(SensorGates, ValidationNamesTheField) {
   g.contact_stiffness = std::numeric_limits<S>::infinity();
   EXPECT_EQ(std::string(g.validate().field), "outlier_gates.contact_stiffness");
   g.contact_stiffness = S(0);
+  EXPECT_TRUE(g.validate().ok());
+  for (const S bad :
+       {S(-1e-3), std::numeric_limits<S>::infinity(), std::numeric_limits<S>::quiet_NaN()}) {
+    g.max_rejection_time = bad;
+    EXPECT_EQ(std::string(g.validate().field), "outlier_gates.max_rejection_time") << bad;
+  }
+  g.max_rejection_time = S(0);
   EXPECT_TRUE(g.validate().ok());
 }
 

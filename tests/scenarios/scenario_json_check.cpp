@@ -166,7 +166,7 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   j["controller"] = ex::parse_json_text(R"({"control_period": 2e-3, "max_tick": 0.02,
       "max_joint_acceleration": 300, "keep_twist_in_reach": true, "at_risk_hold": 0.2,
       "outlier_gates": {"max_object_speed": 0.4, "max_object_angular_speed": 8, "max_force_rate": 200,
-                        "contact_stiffness": 5000, "max_consecutive_rejections": 3},
+                        "contact_stiffness": 5000, "max_rejection_time": 0.003},
       "pose_feedback": {"position_gain": 6, "orientation_gain": 7, "max_linear_speed": 0.04,
                         "max_angular_speed": 0.9, "position_integral_gain": 9,
                         "orientation_integral_gain": 11, "position_integral_limit": 1e-3,
@@ -227,7 +227,7 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   EXPECT_EQ(c.outlier_gates.max_object_angular_speed, 8);
   EXPECT_EQ(c.outlier_gates.max_force_rate, 200);
   EXPECT_EQ(c.outlier_gates.contact_stiffness, 5000);
-  EXPECT_EQ(c.outlier_gates.max_consecutive_rejections, 3);
+  EXPECT_EQ(c.outlier_gates.max_rejection_time, 0.003);
   using FK = ip::FaultSpec::Kind;
   ASSERT_EQ(s.faults.size(), 5u);
   EXPECT_EQ(s.faults[0].kind, FK::tactile_dropout);
@@ -472,8 +472,7 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
   EXPECT_EQ(c.outlier_gates.max_object_angular_speed, dc.outlier_gates.max_object_angular_speed);
   EXPECT_EQ(c.outlier_gates.max_force_rate, dc.outlier_gates.max_force_rate);
   EXPECT_EQ(c.outlier_gates.contact_stiffness, dc.outlier_gates.contact_stiffness);
-  EXPECT_EQ(c.outlier_gates.max_consecutive_rejections,
-            dc.outlier_gates.max_consecutive_rejections);
+  EXPECT_EQ(c.outlier_gates.max_rejection_time, dc.outlier_gates.max_rejection_time);
   EXPECT_TRUE(got.faults.empty());
   EXPECT_EQ(c.pose_feedback.position_gain, dc.pose_feedback.position_gain);
   EXPECT_EQ(c.pose_feedback.orientation_gain, dc.pose_feedback.orientation_gain);
@@ -540,6 +539,12 @@ TEST(ScenarioJson, RejectsBadValuesNamingTheKey) {
       {"unknown plant key",
        [](Json& j) { j["plant"]["frictoin"] = 0.5; },
        {"plant.frictoin", "unknown key"}},
+      {"the tick count the hold time replaced",
+       [](Json& j) { j["controller"]["outlier_gates"]["max_consecutive_rejections"] = 5; },
+       {"controller.outlier_gates.max_consecutive_rejections", "replaced by max_rejection_time"}},
+      {"negative hold time",
+       [](Json& j) { j["controller"]["outlier_gates"]["max_rejection_time"] = -0.001; },
+       {"controller.outlier_gates.max_rejection_time", "must be"}},
       {"wrong type: string for number",
        [](Json& j) { j["object"]["mass"] = "0.05"; },
        {"object.mass", "must be a number", "string"}},

@@ -17,10 +17,14 @@ namespace inhand {
 /// Plausibility gates on the sensed data (sensor faults: a vision outlier, a force
 /// spike). A sample whose change since the last ACCEPTED one exceeds what the bound
 /// allows over the elapsed time is rejected: the last accepted value is used instead
-/// and the warning pose_outlier / force_outlier is raised. After
-/// `max_consecutive_rejections` rejections in a row the sample is accepted anyway, so
-/// a real jump (the object was knocked) is followed after that many ticks. Contacts
-/// that (re)start touching are always accepted. +infinity (the default) disables a gate.
+/// and the warning pose_outlier / force_outlier is raised. A reading is held for at most
+/// `max_rejection_time` seconds of the caller's clock: a sample is rejected only while
+/// the time since the last accepted one, this tick's dt included, is below
+/// max_rejection_time + dt / 2 (the hold rounded to the nearest whole tick: 5 ticks at
+/// 1 kHz, 10 at 2 kHz, none at 100 Hz for 5 ms); then it is accepted whatever it is, so a
+/// real jump (the object was knocked) is followed after that long at any loop rate.
+/// Contacts that (re)start touching are always accepted. +infinity (the default)
+/// disables a gate.
 /// A force changes when the finger itself presses or withdraws: the force gate credits
 /// the change the finger's own measured motion explains (contact_stiffness times the
 /// fingertip's step into the object since the last accepted reading, ForceGate) and
@@ -36,7 +40,8 @@ struct OutlierGates {
   /// contact normal, through the last tick's Jacobian) is the finger's own doing, not an
   /// outlier. 0: the rate bound alone. The default is force_layer.max_stiffness's.
   Scalar contact_stiffness = Scalar(1e5);
-  int max_consecutive_rejections = 5;
+  /// s, >= 0 and finite: the longest a rejected reading is held (above); 0: never held.
+  Scalar max_rejection_time = Scalar(0.005);
   Validation validate() const noexcept {
     if (!(max_object_speed > Scalar(0)) || max_object_speed != max_object_speed)
       return Validation::invalid("outlier_gates.max_object_speed", "must be > 0 (+inf disables)");
@@ -49,11 +54,20 @@ struct OutlierGates {
     if (!(contact_stiffness >= Scalar(0)) ||
         !(contact_stiffness < std::numeric_limits<Scalar>::infinity()))
       return Validation::invalid("outlier_gates.contact_stiffness", "must be >= 0 and finite");
-    if (max_consecutive_rejections < 0)
-      return Validation::invalid("outlier_gates.max_consecutive_rejections", "must be >= 0");
+    if (!(max_rejection_time >= Scalar(0)) ||
+        !(max_rejection_time < std::numeric_limits<Scalar>::infinity()))
+      return Validation::invalid("outlier_gates.max_rejection_time", "must be >= 0 and finite");
     return Validation::valid();
   }
 };
+
+/// Whether a reading rejected so far has been held as long as the gates allow: the time
+/// since the last accepted one, elapsed [s] (this tick's dt [s] included), has reached
+/// max_rejection_time + dt / 2 (OutlierGates).
+template <typename Scalar>
+inline bool held_too_long(const OutlierGates<Scalar>& g, Scalar elapsed, Scalar dt) noexcept {
+  return elapsed >= g.max_rejection_time + Scalar(0.5) * dt;
+}
 
 /// The object-pose gate's state: the last accepted pose.
 template <typename Scalar, int Dim>
@@ -65,11 +79,8 @@ class PoseGate {
     bool outlier = false;  ///< the measured pose was rejected
   };
 
-  /// Forgets the rejection count (the held pose stays until the next accepted one).
-  void reset() noexcept {
-    rejections_ = 0;
-    age_ = Scalar(0);
-  }
+  /// Restarts the hold's clock (the held pose stays until the next accepted one).
+  void reset() noexcept { age_ = Scalar(0); }
   /// One tick, dt [s] since the last one; `first`: no pose accepted yet (always accepts).
   Step update(const OutlierGates<Scalar>& g, const PoseT& measured, Scalar dt,
               bool first) noexcept {
@@ -81,14 +92,12 @@ class PoseGate {
                             Rotation<Scalar, Dim>(measured.rotation * pose_.rotation.transpose()))
                             .norm();
       accept = dp <= g.max_object_speed * elapsed && dr <= g.max_object_angular_speed * elapsed;
-      if (!accept && rejections_ >= g.max_consecutive_rejections) accept = true;
+      if (!accept && held_too_long(g, elapsed, dt)) accept = true;
     }
     if (accept) {
       pose_ = measured;
-      rejections_ = 0;
       age_ = Scalar(0);
     } else {
-      ++rejections_;
       age_ = elapsed;
     }
     return Step{pose_, !accept};
@@ -97,7 +106,6 @@ class PoseGate {
 
  private:
   PoseT pose_{};
-  int rejections_ = 0;
   Scalar age_ = Scalar(0);  ///< s since the last accepted pose
 };
 
@@ -106,10 +114,7 @@ template <typename Scalar>
 class ForceGate {
  public:
   /// Back to "no force accepted yet".
-  void reset() noexcept {
-    valid_ = false;
-    rejections_ = 0;
-  }
+  void reset() noexcept { valid_ = false; }
   /// One tick, dt [s] since the last one. `credit` [N], signed: the change of the reading
   /// the finger's own motion over this tick explains (contact_stiffness times the
   /// fingertip's step into the object; > 0 pressed in, < 0 withdrawn). The change since
@@ -127,16 +132,14 @@ class ForceGate {
     const Scalar credited = credit_ + credit;
     const Scalar change = reading - force_;
     const Scalar allowed = g.max_force_rate * elapsed;
-    const bool ok = !valid_ || rejections_ >= g.max_consecutive_rejections ||
+    const bool ok = !valid_ || held_too_long(g, elapsed, dt) ||
                     (change <= std::max(Scalar(0), credited) + allowed &&
                      change >= std::min(Scalar(0), credited) - allowed);
     if (ok) {
       force_ = reading;
       valid_ = true;
-      rejections_ = 0;
       age_ = credit_ = Scalar(0);
     } else {
-      ++rejections_;
       age_ = elapsed;
       credit_ = credited;
     }
@@ -147,7 +150,6 @@ class ForceGate {
  private:
   Scalar force_ = Scalar(0);
   bool valid_ = false;
-  int rejections_ = 0;
   Scalar age_ = Scalar(0);     ///< s since the last accepted force
   Scalar credit_ = Scalar(0);  ///< N, the credit summed since the last accepted force
 };
