@@ -132,9 +132,10 @@ class ForceGate {
     const Scalar credited = credit_ + credit;
     const Scalar change = reading - force_;
     const Scalar allowed = g.max_force_rate * elapsed;
-    const bool ok = !valid_ || held_too_long(g, elapsed, dt) ||
+    const bool ok = !valid_ ||
                     (change <= std::max(Scalar(0), credited) + allowed &&
-                     change >= std::min(Scalar(0), credited) - allowed);
+                     change >= std::min(Scalar(0), credited) - allowed) ||
+                    held_too_long(g, elapsed, dt);
     if (ok) {
       force_ = reading;
       valid_ = true;
