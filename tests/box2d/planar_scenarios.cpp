@@ -254,14 +254,15 @@ struct FaultRun {
   double max_speed = 0.0;  ///< u/s, true object speed after the grasp
 };
 
-/// Runs `spec` (one fault); counts the gates' warnings outside the fault window and the
-/// 50 ms after it (which a knock's real motion may trigger), and inside.
-// The ticks a rejected reading is held at most: max_rejection_time rounded to whole ticks.
+// The ticks a rejected reading is held at most: max_rejection_time rounded to whole ticks,
+// at least one.
 long held_ticks(const b2d::ScenarioSpec& spec) {
-  return std::lround(spec.controller.outlier_gates.max_rejection_time /
-                     spec.controller.control_period);
+  return std::max(1L, std::lround(spec.controller.outlier_gates.max_rejection_time /
+                                  spec.controller.control_period));
 }
 
+/// Runs `spec` (one fault); counts the gates' warnings outside the fault window and the
+/// 50 ms after it (which a knock's real motion may trigger), and inside.
 FaultRun run_fault(const b2d::ScenarioSpec& spec) {
   FaultRun f;
   const b2d::FaultSpec& fs = spec.faults.at(0);

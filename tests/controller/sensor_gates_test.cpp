@@ -1,9 +1,9 @@
 // Properties of the sensor gates (controller/sensor_gates.hpp): a force spike is rejected
 // and the last accepted reading held; a real jump is followed once the reading has been
-// held for max_rejection_time, at any tick length and with jitter; a change the finger's own press
-// or withdrawal explains (the credit) is accepted at any tick length, with its sign; credit and
-// time add up over rejected ticks; a new touch is accepted as it comes; the pose gate's speed
-// bounds. float and double.
+// held for max_rejection_time (at least one tick), at any tick length and with jitter; a change the
+// finger's own press or withdrawal explains (the credit) is accepted at any tick length, with its
+// sign; credit and time add up over rejected ticks; a new touch is accepted as it comes; the pose
+// gate's speed bounds. float and double.
 #include "inhand/controller/sensor_gates.hpp"
 
 #include <gtest/gtest.h>
@@ -43,8 +43,8 @@ TYPED_TEST(SensorGates, SpikeOnAStillFingerIsRejectedAndTheReadingHeld) {
   EXPECT_EQ(gate.force(), S(1.2));
 }
 
-// The hold is max_rejection_time (3 ms) rounded to whole ticks: held while the time since
-// the last accepted reading is below 3 ms + dt / 2.
+// The hold is max_rejection_time (3 ms) rounded to whole ticks, at least one: held while
+// the time since the last accepted reading is below max(3 ms, dt) + dt / 2; 0: never held.
 TYPED_TEST(SensorGates, ARealJumpIsFollowedAfterTheHoldTimeAtAnyRate) {
   using S = TypeParam;
   const OutlierGates<S> g = this->gates();
@@ -52,7 +52,7 @@ TYPED_TEST(SensorGates, ARealJumpIsFollowedAfterTheHoldTimeAtAnyRate) {
     S dt;
     int held;
   };
-  for (const Rate r : {Rate{S(5e-4), 6}, Rate{S(1e-3), 3}, Rate{S(2e-3), 1}, Rate{S(1e-2), 0}}) {
+  for (const Rate r : {Rate{S(5e-4), 6}, Rate{S(1e-3), 3}, Rate{S(2e-3), 1}, Rate{S(1e-2), 1}}) {
     ForceGate<S> gate;
     gate.update(g, true, S(1), S(0), r.dt);
     PoseGate<S, 3> pose_gate;
@@ -86,10 +86,22 @@ TYPED_TEST(SensorGates, TheHoldIsCountedInTimeUnderJitter) {
   EXPECT_EQ(gate.force(), S(5));
 }
 
-TYPED_TEST(SensorGates, TheFingersOwnPressIsCreditedAtAnyTickLength) {
+// max_rejection_time 0: a reading beyond the bound is accepted at once, at any rate.
+TYPED_TEST(SensorGates, AZeroHoldNeverHoldsAReading) {
   using S = TypeParam;
   OutlierGates<S> g = this->gates();
-  g.max_rejection_time = S(0.05);  // s: a hold of one tick or more at every rate below
+  g.max_rejection_time = S(0);
+  for (const S dt : {S(5e-4), S(1e-3), S(2e-2)}) {
+    ForceGate<S> gate;
+    gate.update(g, true, S(1), S(0), dt);
+    EXPECT_FALSE(gate.update(g, true, S(5), S(0), dt)) << dt;
+    EXPECT_EQ(gate.force(), S(5));
+  }
+}
+
+TYPED_TEST(SensorGates, TheFingersOwnPressIsCreditedAtAnyTickLength) {
+  using S = TypeParam;
+  const OutlierGates<S> g = this->gates();  // held for at least one tick at every rate
   for (const S dt : {S(5e-4), S(1e-3), S(1e-2), S(2e-2)}) {
     ForceGate<S> gate;
     gate.update(g, true, S(1), S(0), dt);

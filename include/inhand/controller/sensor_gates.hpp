@@ -17,12 +17,13 @@ namespace inhand {
 /// Plausibility gates on the sensed data (sensor faults: a vision outlier, a force
 /// spike). A sample whose change since the last ACCEPTED one exceeds what the bound
 /// allows over the elapsed time is rejected: the last accepted value is used instead
-/// and the warning pose_outlier / force_outlier is raised. A reading is held for at most
-/// `max_rejection_time` seconds of the caller's clock: a sample is rejected only while
-/// the time since the last accepted one, this tick's dt included, is below
-/// max_rejection_time + dt / 2 (the hold rounded to the nearest whole tick: 5 ticks at
-/// 1 kHz, 10 at 2 kHz, none at 100 Hz for 5 ms); then it is accepted whatever it is, so a
-/// real jump (the object was knocked) is followed after that long at any loop rate.
+/// and the warning pose_outlier / force_outlier is raised. A reading is held for
+/// `max_rejection_time` seconds of the caller's clock, and for at least one tick: a sample
+/// is rejected only while the time since the last accepted one, this tick's dt included,
+/// is below max(max_rejection_time, dt) + dt / 2 (the hold rounded to whole ticks, at
+/// least one: for 5 ms, 5 ticks at 1 kHz, 10 at 2 kHz, 1 at 100 Hz and at 50 Hz, so a
+/// gate that is on rejects a one-tick outlier at any rate); then it is accepted whatever it
+/// is, so a real jump (the object was knocked) is followed after about that long.
 /// Contacts that (re)start touching are always accepted. +infinity (the default)
 /// disables a gate.
 /// A force changes when the finger itself presses or withdraws: the force gate credits
@@ -40,7 +41,7 @@ struct OutlierGates {
   /// contact normal, through the last tick's Jacobian) is the finger's own doing, not an
   /// outlier. 0: the rate bound alone. The default is force_layer.max_stiffness's.
   Scalar contact_stiffness = Scalar(1e5);
-  /// s, >= 0 and finite: the longest a rejected reading is held (above); 0: never held.
+  /// s, >= 0 and finite: how long a rejected reading is held (above); 0: never held.
   Scalar max_rejection_time = Scalar(0.005);
   Validation validate() const noexcept {
     if (!(max_object_speed > Scalar(0)) || max_object_speed != max_object_speed)
@@ -63,10 +64,13 @@ struct OutlierGates {
 
 /// Whether a reading rejected so far has been held as long as the gates allow: the time
 /// since the last accepted one, elapsed [s] (this tick's dt [s] included), has reached
-/// max_rejection_time + dt / 2 (OutlierGates).
+/// max(max_rejection_time, dt) + dt / 2; always, for a max_rejection_time of 0
+/// (OutlierGates).
 template <typename Scalar>
 inline bool held_too_long(const OutlierGates<Scalar>& g, Scalar elapsed, Scalar dt) noexcept {
-  return elapsed >= g.max_rejection_time + Scalar(0.5) * dt;
+  if (!(g.max_rejection_time > Scalar(0))) return true;
+  const Scalar hold = g.max_rejection_time > dt ? g.max_rejection_time : dt;
+  return elapsed >= hold + Scalar(0.5) * dt;
 }
 
 /// The object-pose gate's state: the last accepted pose.
