@@ -73,16 +73,16 @@ TYPED_TEST(SensorGates, ARealJumpIsFollowedAfterTheHoldTimeAtAnyRate) {
   }
 }
 
-// Ticks of 0.7 and 1.3 ms alternating: the hold is counted in time, not ticks (held at
-// 0.7, 2.0 and 2.7 ms, followed at 4.0 ms).
+// Ticks of 2.0, 0.5 and 2.0 ms: the hold is counted in time, not ticks -- held at 2.0 and
+// 2.5 ms, followed at 4.5 ms (past 3 ms + 1 ms), where a count of 3 ticks would hold on.
 TYPED_TEST(SensorGates, TheHoldIsCountedInTimeUnderJitter) {
   using S = TypeParam;
   const OutlierGates<S> g = this->gates();
   ForceGate<S> gate;
   gate.update(g, true, S(1), S(0), S(1e-3));
-  const S dts[] = {S(7e-4), S(1.3e-3), S(7e-4), S(1.3e-3)};
-  for (int k = 0; k < 3; ++k) EXPECT_TRUE(gate.update(g, true, S(5), S(0), dts[k])) << k;
-  EXPECT_FALSE(gate.update(g, true, S(5), S(0), dts[3]));
+  EXPECT_TRUE(gate.update(g, true, S(5), S(0), S(2e-3)));
+  EXPECT_TRUE(gate.update(g, true, S(5), S(0), S(5e-4)));
+  EXPECT_FALSE(gate.update(g, true, S(5), S(0), S(2e-3)));
   EXPECT_EQ(gate.force(), S(5));
 }
 
