@@ -1,11 +1,13 @@
 // Tests of the grasp-phase primitives (controller/grasp.hpp): approach_velocity's
 // saturation and its creep along -n (also past the expected contact point, when the
 // object is smaller than expected), the release grip's sizing against the load it must
-// take, parameter and target validation.
+// take, the balancing finger's shift to where the squeeze has no couple, parameter and
+// target validation.
 #include "inhand/controller/grasp.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "common/test_support.hpp"
+#include "inhand/controller/grasp_map.hpp"
 
 namespace {
 
@@ -165,6 +168,84 @@ void check_release_grip_scale(std::uint64_t seed) {
   record("release_grip_scale.cases_capped", capped);
   EXPECT_GT(binding, cases / 10);  // the sweep exercises the load bound, not only release_grip
   EXPECT_GT(capped, 0);
+}
+
+/// The moment sum_i q_i (p_i - c) x (-n_i) of normal forces about c, in space.
+template <int Dim>
+Eigen::Vector3d couple(const Eigen::Matrix<double, Dim, Eigen::Dynamic>& P,
+                       const Eigen::Matrix<double, Dim, Eigen::Dynamic>& N,
+                       const Eigen::VectorXd& q, const Eigen::Vector3d& c) {
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  for (int i = 0; i < q.size(); ++i) {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
+    p.head<Dim>() = P.col(i);
+    n.head<Dim>() = N.col(i);
+    m += q(i) * (p - c).cross(-n);
+  }
+  return m;
+}
+
+// balancing_shift (grasp_map.hpp): for balanced normal forces (sum q_i n_i = 0, the
+// balancing finger b taking what the others leave, as the planner's balancing role does)
+// b's contact moved by delta on a flat face (its normal unchanged) leaves no moment across
+// n_b -- none at all in the plane -- and the twist about n_b as it was; delta lies in b's
+// tangent plane. A finger b with q_b <= 0 gets no shift.
+template <int Dim>
+void check_balancing_shift(std::uint64_t seed) {
+  using Vec = inhand::Vector<double, Dim>;
+  auto rng = inhand_test::make_rng(seed);
+  std::uniform_int_distribution<int> count(2, 5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), coord(-0.05, 0.05);
+  const int cases = scaled(500);
+  double worst = 0.0, largest_shift = 0.0;
+  for (int k = 0; k < cases; ++k) {
+    const int n = count(rng);
+    std::uniform_int_distribution<int> pick(0, n - 1);
+    const int b = pick(rng);
+    Eigen::Matrix<double, Dim, Eigen::Dynamic> P(Dim, n), N(Dim, n);
+    Eigen::VectorXd q(n);
+    Vec rest = Vec::Zero();
+    for (int i = 0; i < n; ++i) {
+      for (int d = 0; d < Dim; ++d) P(d, i) = coord(rng);
+      if (i == b) continue;
+      N.col(i) = inhand_test::random_unit_vector<double, Dim>(rng);
+      q(i) = 0.2 + 2.0 * unit(rng);
+      rest += q(i) * N.col(i);
+    }
+    if (!(rest.norm() > 1e-3)) continue;
+    q(b) = rest.norm();
+    N.col(b) = -rest / q(b);
+    const Vec delta = inhand::balancing_shift<double, Dim>(P, N, q, b);
+    ASSERT_TRUE(delta.allFinite());
+    EXPECT_NEAR(delta.dot(N.col(b)), 0.0, 1e-15) << "case " << k;
+    Eigen::Matrix<double, Dim, Eigen::Dynamic> moved = P;
+    moved.col(b) += delta;
+    Eigen::Vector3d nb = Eigen::Vector3d::Zero();
+    nb.template head<Dim>() = N.col(b);
+    const Eigen::Vector3d m0 = couple<Dim>(P, N, q, Eigen::Vector3d::Zero());
+    const Eigen::Vector3d m1 = couple<Dim>(moved, N, q, Eigen::Vector3d::Zero());
+    const double scale = q.sum() * 0.1;  // N m: the forces times the points' spread
+    const double across = (m1 - m1.dot(nb) * nb).norm() / scale;
+    EXPECT_LT(across, 1e-12) << "case " << k;
+    EXPECT_NEAR(m1.dot(nb), m0.dot(nb), 1e-12 * scale) << "case " << k;
+    if (Dim == 2) {
+      EXPECT_LT(m1.norm() / scale, 1e-12) << "case " << k;
+    }
+    worst = std::max(worst, across);
+    largest_shift = std::max(largest_shift, delta.norm());
+    Eigen::VectorXd unloaded = q;
+    unloaded(b) = 0.0;
+    const Vec none = inhand::balancing_shift<double, Dim>(P, N, unloaded, b);
+    EXPECT_EQ(none.norm(), 0.0);
+  }
+  record("balancing_shift.worst_relative_moment_left", worst);
+  record("balancing_shift.largest_shift_m", largest_shift);
+  EXPECT_GT(largest_shift, 1e-3);  // the sweep moves fingers, not only balanced grasps
+}
+
+TEST(BalancingShift, LeavesNoCoupleAcrossTheBalancingNormalPlanar) { check_balancing_shift<2>(31); }
+TEST(BalancingShift, LeavesNoCoupleAcrossTheBalancingNormalSpatial) {
+  check_balancing_shift<3>(32);
 }
 
 TEST(ReleaseGripScale, EveryFingerKeepsMinForceUnderTheLoadPlanar) {

@@ -133,9 +133,7 @@ void begin_grasp(const typename Types::Config& config, const Targets& targets,
   st.planner.plan(sc.touching, sc.normals, config.control_period, sc.pattern, residual);
   const auto r = release_grip_scale(sc.normals.leftCols(n), sc.pattern.head(n), config.force_layer,
                                     config.force_planner.min_force, config.force_planner.max_force);
-  st.grasp_grip = r.scale;
-  st.grasp_grip_capped = r.capped;
-  st.grasp_grip_measured = false;
+  st.begin_grasp_sizing(r.scale, r.capped);
   for (int i = 0; i < n; ++i) {
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     m.target = targets[static_cast<std::size_t>(i)];
@@ -157,6 +155,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
   const GraspParams<Scalar>& g = t.config.grasp;
   ControllerWarning w = out.warnings;
   w |= detail::size_grip_on_measured_normals(t.config, t.in, st, sc);
+  detail::balance_grasp(t.config, t.in, st, sc);
   // A placed finger presses with its grasp force f_g, a finger not yet placed slides to
   // its target with slide_force_fraction of its pattern q_g (both set by start_grasp).
   for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {
@@ -176,7 +175,8 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
       m.touched = true;
       m.remember_contact(f.contact, t.object);
       const PressStep<Scalar, Types::kDim> press =
-          press_step(g, m.target, f.contact.contact_point, f.contact.normal, t.dt, m.settle);
+          press_step(st.press_params(g, i), m.target, f.contact.contact_point, f.contact.normal,
+                     t.dt, m.settle);
       // Once placed, the finger presses still: sliding on under the full force would load
       // the object tangentially again (grasp.hpp).
       const typename Types::Vec v =

@@ -85,6 +85,8 @@ struct ControllerState {
   Scalar grasp_grip = Scalar(0);         ///< s_g of the grasp (grasp.hpp); 0: none begun
   bool grasp_grip_measured = false;      ///< s_g sized over the measured normals yet
   bool grasp_grip_capped = false;        ///< max_force lowered s_g (release_grip_scale)
+  bool grasp_balanced = false;           ///< the balancing shift was taken (balance_grasp)
+  int grasp_balancing = -1;              ///< the finger sliding to it, -1: none
   /// The twist was cut on the last tick and still asked beyond the workspace's edge
   /// (workspace_limits.hpp: the cut then stays on).
   bool edge_cut = false;
@@ -124,6 +126,21 @@ struct ControllerState {
                                      ForceLayerStatus::over_max_force);
     risk_hold = at_risk ? hold : (risk_hold > dt ? risk_hold - dt : Scalar(0));
     return at_risk || risk_hold > Scalar(0);
+  }
+  /// A new grasp's grip s_g and whether max_force capped it (start_grasp); the grip's
+  /// sizing over the measured normals and the balancing shift not yet taken.
+  void begin_grasp_sizing(Scalar grip, bool capped) noexcept {
+    grasp_grip = grip;
+    grasp_grip_capped = capped;
+    grasp_grip_measured = grasp_balanced = false;
+    grasp_balancing = -1;
+  }
+  /// The grasp parameters finger i presses with: position_tolerance a quarter as large
+  /// while it slides to the balancing shift's point (balance_grasp).
+  GraspParams<Scalar> press_params(const GraspParams<Scalar>& g, int i) const noexcept {
+    GraspParams<Scalar> p = g;
+    if (i == grasp_balancing) p.position_tolerance *= Scalar(0.25);
+    return p;
   }
   /// Back to idle: integrators, filters, grasp and trajectory progress cleared.
   void reset() noexcept {
@@ -228,6 +245,46 @@ ControllerWarning size_grip_on_measured_normals(const typename Types::Config& co
     }
   }
   return st.grasp_grip_capped ? ControllerWarning::release_grip_capped : none;
+}
+
+/// The balancing shift (grasp.hpp, "A squeeze without a couple"): once per grasp, with
+/// exactly one balancing finger b, on the first tick every finger touches and is placed,
+/// b's target moves by balancing_shift() (grasp_map.hpp) of the grasp pattern over the
+/// measured contacts, its target normal becomes the measured one, and if that is farther
+/// than a quarter of position_tolerance b slides there (not placed; press_params) before
+/// it presses again. Uses sc.points, sc.normals and sc.pattern as its workspace (the grasp
+/// phase writes all three after it on every tick).
+template <typename Types>
+void balance_grasp(const typename Types::Config& config, const typename Types::Input& in,
+                   ControllerState<Types>& st, TickScratch<Types>& sc) noexcept {
+  using Scalar = typename Types::ScalarType;
+  const int n = static_cast<int>(st.fingers.size());
+  const int sliding = st.grasp_balancing;
+  if (sliding >= 0 && st.fingers[static_cast<std::size_t>(sliding)].settle.placed)
+    st.grasp_balancing = -1;
+  int b = -1;
+  for (int i = 0; i < n && !st.grasp_balanced; ++i) {
+    const typename Types::FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
+    const FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
+    if (config.fingers[static_cast<std::size_t>(i)].role == FingerRole::balancing) {
+      st.grasp_balanced = b >= 0;  // a second balancing finger: no shift for this grasp
+      b = i;
+    }
+    if (!f.contact.touching || !m.settle.placed) return;
+    sc.points.col(i) = f.contact.contact_point;
+    sc.normals.col(i) = f.contact.normal.normalized();
+    sc.pattern(i) = m.grasp_pattern;
+  }
+  if (st.grasp_balanced || b < 0) return;
+  st.grasp_balanced = true;
+  const typename Types::Vec d = balancing_shift<Scalar, Types::kDim>(
+      sc.points.leftCols(n), sc.normals.leftCols(n), sc.pattern.head(n), b);
+  if (!(d.norm() > Scalar(0.25) * config.grasp.position_tolerance)) return;
+  FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(b)];
+  m.target.contact_point = sc.points.col(b) + d;
+  m.target.normal = sc.normals.col(b);
+  m.settle.start();
+  st.grasp_balancing = b;
 }
 }  // namespace detail
 

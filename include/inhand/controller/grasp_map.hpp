@@ -136,4 +136,37 @@ class GraspMap {
   Scalar lever_ = Scalar(1);
 };
 
+/// The shift delta [m] of balancing finger b's contact, in its tangent plane, that removes
+/// the couple of the normal forces `pattern` (n, N) across n_b (grasp.hpp, "A squeeze
+/// without a couple"). points, normals: Dim x n, world frame, OUTWARD unit normals; the
+/// force of finger i on the object is -pattern_i n_i. With M = sum_i q_i (p_i - c) x (-n_i),
+/// c the q-weighted centroid of the points, moving b by delta changes M by
+/// -q_b delta x n_b, so delta = n_b x M / q_b leaves (M . n_b) n_b, since
+/// (n x M) x n = M - (M . n) n: exact on a flat face, a first step on a curved one (the
+/// normal turns as b moves). Planar (Dim 2): M about z. Zero unless q_b > 0. noexcept.
+template <typename Scalar, int Dim, typename DerivedP, typename DerivedN, typename DerivedQ>
+Vector<Scalar, Dim> balancing_shift(const Eigen::MatrixBase<DerivedP>& points,
+                                    const Eigen::MatrixBase<DerivedN>& normals,
+                                    const Eigen::MatrixBase<DerivedQ>& pattern, int b) noexcept {
+  using V3 = Vector<Scalar, 3>;
+  const auto lift = [](const auto& v) {  // a point or vector of the plane in space
+    V3 r = V3::Zero();
+    r.template head<Dim>() = v;
+    return r;
+  };
+  const int n = static_cast<int>(pattern.size());
+  Scalar sum = Scalar(0);
+  V3 c = V3::Zero();
+  for (int i = 0; i < n; ++i) {
+    sum += pattern(i);
+    c += pattern(i) * lift(points.col(i));
+  }
+  if (!(pattern(b) > Scalar(0)) || !(sum > Scalar(0))) return Vector<Scalar, Dim>::Zero();
+  c /= sum;
+  V3 m = V3::Zero();
+  for (int i = 0; i < n; ++i)
+    m += pattern(i) * (lift(points.col(i)) - c).cross(V3(-lift(normals.col(i))));
+  return (lift(normals.col(b)).cross(m) / pattern(b)).template head<Dim>();
+}
+
 }  // namespace inhand
