@@ -45,13 +45,13 @@
 // force left 0.8 * 6 N = 4.8 N on a 50 g object, which then rolled out of a stiff
 // (50 kN/m) grasp in 9 ms; sliding at 0.3 q_g leaves 30 % of that.
 // A squeeze without a couple. q_g cancels the resultant force, not the moment: a thumb
-// 1-3 mm off the line of the fingers opposite (a slender box in MuJoCo's Shadow-like hand)
-// squeezes with a couple q_thumb x offset that the fixture carries; released, it rolled the
-// box 0.12 rad. So on the first tick every finger is placed, the single balancing finger's
-// target moves by balancing_shift() (grasp_map.hpp) to where the pattern's moment across
-// its normal vanishes, and if that is more than position_tolerance / 4 away it slides
-// there at slide_force_fraction, placed again within position_tolerance / 4 (one shot
-// per grasp: contact noise moves the point by about its own size; none with several
+// about 1 mm off the line of the fingers opposite (a slender box in MuJoCo's Shadow-like
+// hand) squeezes with a couple q_thumb x offset that the fixture carries; released, it rolled
+// the box 0.12 rad (release_grip 2). So on the first tick every finger is placed, the single
+// balancing finger's target moves by balancing_shift() (grasp_map.hpp) to where the pattern's
+// moment across its normal vanishes, and if that is more than position_tolerance / 4 away it
+// slides there at slide_force_fraction, placed again within position_tolerance / 4 (one
+// shot per grasp: contact noise moves the point by about its own size; none with several
 // balancing fingers). Exact on a flat face, a first step on a curved one.
 // A finger that loses its contact during the grasp after touching comes back at
 // creep_speed (surface_point below), not at approach_speed: the object is held until
