@@ -4,6 +4,9 @@
 // built around the case's joint; the refusals are printed ("[ refused  ]").
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <cstdlib>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -104,6 +107,21 @@ std::vector<BadCase> bad_cases() {
        "tip", "<material>"},
       {"'%' in element text", hand("j2", "revolute", ok_inner, "<note>50%</note>"), "tip",
        "text of <note>"},
+      // tinyxml steps over the bytes a UTF-8 lead byte announces without looking for the
+      // end of the text: a fuzzed document read past its buffer that way.
+      {"a UTF-8 lead byte at the end of the text", hand("j2", "revolute", ok_inner) + "\xF0", "tip",
+       "UTF-8"},
+      {"a UTF-8 lead byte before a NUL",
+       hand("j2", "revolute", ok_inner, "<note>\xE2" + std::string(1, '\0') + "</note>"), "tip",
+       "UTF-8"},
+      {"a lone 0xEF at the end (tinyxml's line count would loop)",
+       hand("j2", "revolute", ok_inner) + "\xEF", "tip", "UTF-8"},
+      {"an overlong '/' in a link name",
+       hand("j2", "revolute", ok_inner, "<link name='a\xC0\xAF'/>"), "tip", "UTF-8"},
+      {"a surrogate in a comment", hand("j2", "revolute", ok_inner, "<!-- \xED\xA0\x80 -->"), "tip",
+       "UTF-8"},
+      {"a Latin-1 byte in text", hand("j2", "revolute", ok_inner, "<note>M\xFCller</note>"), "tip",
+       "UTF-8"},
   };
 }
 
@@ -122,6 +140,83 @@ TEST(UrdfErrors, EachBadDocumentIsRefusedNamingTheElement) {
     std::cout << "[ refused  ] " << c.what << ": " << r.error << "\n";
   }
   EXPECT_EQ(refused, static_cast<int>(bad_cases().size()));
+}
+
+// A document that is not UTF-8 is refused naming the first offending byte and its line.
+TEST(UrdfErrors, NotUtf8NamesTheByteAndItsLine) {
+  const std::string xml = "<robot name='r'>\n<link name='palm'/>\n<!-- \xE2\x82 -->\n</robot>";
+  const auto r = inhand::urdf::read_fingers_string(xml, {{"f", "palm", "tip"}});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error.find("byte 42 (line 3, 0xE2)"), std::string::npos) << r.error;
+}
+
+// Well-formed UTF-8 reads: a byte-order mark, and 2-, 3- and 4-byte characters in a
+// comment, in text, and in the names of a link and a joint outside the finger.
+TEST(UrdfErrors, Utf8DocumentsRead) {
+  const std::string xml =
+      "\xEF\xBB\xBF" + hand("j2", "revolute", kAxis + kLimit,
+                            "<!-- Daumen \xC3\xBC, \xE2\x9C\x93, \xF0\x9D\x84\x9E -->"
+                            "<note>\xC2\xB5m</note><link name='\xE6\x8C\x87'/>" +
+                                joint("\xC3\xA9", "fixed", "palm", "\xE6\x8C\x87", ""));
+  const auto r = inhand::urdf::read_fingers_string(xml, {{"f", "palm", "tip"}});
+  ASSERT_TRUE(r.ok()) << r.error;
+  EXPECT_EQ(r.fingers[0].dof(), 2);
+}
+
+// The check against a decoder written the other way (the code point assembled from its
+// bits, then its range checked): every string of one and two bytes, every three-byte
+// string that starts with a lead byte, and seeded random four-byte strings
+// (INHAND_URDF_UTF8_SAMPLES of them, default 200 000) agree on accepted or refused.
+bool decodes_as_utf8(const std::string& s) {
+  for (std::size_t i = 0; i < s.size();) {
+    const auto b0 = static_cast<unsigned char>(s[i]);
+    int n = b0 < 0x80 ? 1 : (b0 >> 5) == 0x6 ? 2 : (b0 >> 4) == 0xE ? 3 : (b0 >> 3) == 0x1E ? 4 : 0;
+    if (n == 0 || b0 == 0 || i + static_cast<std::size_t>(n) > s.size()) return false;
+    std::uint32_t cp = n == 1 ? b0 : (b0 & (0x7Fu >> n));
+    for (int k = 1; k < n; ++k) {
+      const auto c = static_cast<unsigned char>(s[i + static_cast<std::size_t>(k)]);
+      if ((c >> 6) != 0x2) return false;
+      cp = (cp << 6) | (c & 0x3Fu);
+    }
+    const std::uint32_t min_cp[5] = {0, 0, 0x80, 0x800, 0x10000};
+    if (cp < min_cp[n] || (cp >= 0xD800 && cp <= 0xDFFF) || cp > 0x10FFFF) return false;
+    i += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+TEST(UrdfErrors, Utf8CheckAgreesWithADecoder) {
+  using inhand::urdf::detail::find_invalid_utf8;
+  long checked = 0, accepted = 0;
+  const auto agree = [&](const std::string& s) {
+    const bool valid = decodes_as_utf8(s);
+    accepted += valid ? 1 : 0;
+    ++checked;
+    if (find_invalid_utf8(s).empty() == valid) return true;
+    ADD_FAILURE() << "disagree on " << ::testing::PrintToString(s) << " (decoder: " << valid << ")";
+    return false;
+  };
+  for (int a = 0; a < 256; ++a) {
+    if (!agree(std::string(1, static_cast<char>(a)))) return;
+    for (int b = 0; b < 256; ++b) {
+      const std::string two{static_cast<char>(a), static_cast<char>(b)};
+      if (!agree(two)) return;
+      if (a < 0xC0) continue;
+      for (int c = 0; c < 256; ++c)
+        if (!agree(two + static_cast<char>(c))) return;
+    }
+  }
+  const char* env = std::getenv("INHAND_URDF_UTF8_SAMPLES");
+  const long samples = env != nullptr ? std::atol(env) : 200000;
+  std::mt19937 rng(15);
+  std::uniform_int_distribution<int> lead(0xF0, 0xF7), cont(0x70, 0xC7);
+  for (long i = 0; i < samples; ++i) {
+    const std::string four{static_cast<char>(lead(rng)), static_cast<char>(cont(rng)),
+                           static_cast<char>(cont(rng)), static_cast<char>(cont(rng))};
+    if (!agree(four)) return;
+  }
+  std::cout << "[ utf-8    ] " << checked << " strings, " << accepted << " well-formed\n";
+  EXPECT_GT(accepted, 0);
 }
 
 // A tip link on another branch of the tree: the error names both links.

@@ -15,12 +15,22 @@
 // '%' in any attribute value or text is refused, naming the attribute or element and its
 // line, before urdfdom sees it. A mesh's `filename` is exempt: urdfdom never formats it,
 // and URL-escaped paths carry '%'.
+//
+// tinyxml also trusts a UTF-8 lead byte: it steps over as many bytes as the lead byte
+// announces without looking for the end of the text, so a lead byte near the end (or
+// before a NUL) makes it read past the buffer (a fuzzed document: a heap overflow under
+// AddressSanitizer), and a lone 0xEF there makes its line count loop forever. Before
+// either parser sees it, the document must therefore be well-formed UTF-8 (RFC 3629: no
+// overlong forms, no surrogates, nothing above U+10FFFF) without NUL bytes, as XML
+// requires of a document with no declared encoding; otherwise it is refused, naming the
+// byte's offset and line.
 #pragma once
 
 #include <console_bridge/console.h>
 #include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <mutex>
@@ -61,6 +71,51 @@ inline const TiXmlNode* next_node(const TiXmlNode* node) noexcept {
   return nullptr;
 }
 
+/// Empty if `xml` is well-formed UTF-8 without NUL bytes; otherwise names the first
+/// offending byte (its offset from 0, its line from 1, its value).
+inline std::string find_invalid_utf8(const std::string& xml) {
+  const auto byte = [&xml](std::size_t i) { return static_cast<unsigned char>(xml[i]); };
+  std::size_t line = 1;
+  for (std::size_t i = 0; i < xml.size();) {
+    const unsigned char lead = byte(i);
+    // The continuation bytes a lead byte announces, and the range of the first of them
+    // (narrower than 0x80-0xBF where an overlong form, a surrogate or a code point above
+    // U+10FFFF would start).
+    int more = 0;
+    unsigned char first_lo = 0x80, first_hi = 0xBF;
+    if (lead >= 0x01 && lead <= 0x7F) {
+      more = 0;
+    } else if (lead >= 0xC2 && lead <= 0xDF) {
+      more = 1;
+    } else if (lead >= 0xE0 && lead <= 0xEF) {
+      more = 2;
+      if (lead == 0xE0) first_lo = 0xA0;
+      if (lead == 0xED) first_hi = 0x9F;
+    } else if (lead >= 0xF0 && lead <= 0xF4) {
+      more = 3;
+      if (lead == 0xF0) first_lo = 0x90;
+      if (lead == 0xF4) first_hi = 0x8F;
+    } else {
+      more = -1;  // NUL, a continuation byte, 0xC0, 0xC1, 0xF5-0xFF
+    }
+    bool ok = more >= 0 && i + static_cast<std::size_t>(more) < xml.size();
+    for (int k = 1; ok && k <= more; ++k) {
+      const unsigned char c = byte(i + static_cast<std::size_t>(k));
+      ok = k == 1 ? (c >= first_lo && c <= first_hi) : (c >= 0x80 && c <= 0xBF);
+    }
+    if (!ok) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(lead));
+      return "byte " + std::to_string(i) + " (line " + std::to_string(line) + ", " + hex +
+             (lead == 0 ? ", a NUL byte" : "") +
+             ") is not well-formed UTF-8 (the reader takes UTF-8 documents only)";
+    }
+    if (lead == '\n') ++line;
+    i += static_cast<std::size_t>(more) + 1;
+  }
+  return {};
+}
+
 /// Empty if no attribute value (other than `filename`) and no text of the document holds
 /// a '%'; otherwise names the first one. A document tinyxml cannot read passes here:
 /// urdfdom then refuses it with tinyxml's own (constant) message.
@@ -89,6 +144,11 @@ inline std::string find_format_character(const std::string& xml) {
 
 /// Parses a URDF document. Returns the model, or null with `error` set.
 inline ::urdf::ModelInterfaceSharedPtr parse_model(const std::string& xml, std::string& error) {
+  const std::string encoding = find_invalid_utf8(xml);
+  if (!encoding.empty()) {
+    error = "the document's " + encoding;
+    return nullptr;
+  }
   const std::string percent = find_format_character(xml);
   if (!percent.empty()) {
     error = percent + " contains '%' (refused: urdfdom 3.0 would pass it to printf as a format)";
@@ -116,7 +176,6 @@ inline ::urdf::ModelInterfaceSharedPtr parse_model(const std::string& xml, std::
   return model;
 }
 
-/// Reads a whole file into `text`. Returns false, with `error` set, if it cannot.
 /// Clears the links' child and parent-joint pointers so that the model is freed even
 /// when its link graph has a cycle (urdfdom keeps children by shared pointer, and does
 /// not refuse every cyclic document: such a model would otherwise never be freed).
@@ -130,6 +189,7 @@ inline void release_model(::urdf::ModelInterface& model) noexcept {
   model.root_link_.reset();
 }
 
+/// Reads a whole file into `text`. Returns false, with `error` set, if it cannot.
 inline bool read_text_file(const std::string& path, std::string& text, std::string& error) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream buffer;
