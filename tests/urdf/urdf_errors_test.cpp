@@ -114,7 +114,7 @@ std::vector<BadCase> bad_cases() {
       {"a UTF-8 lead byte before a NUL",
        hand("j2", "revolute", ok_inner, "<note>\xE2" + std::string(1, '\0') + "</note>"), "tip",
        "UTF-8"},
-      {"a lone 0xEF at the end (tinyxml's line count would loop)",
+      {"a lone 0xEF at the end (an unpatched tinyxml's line count loops)",
        hand("j2", "revolute", ok_inner) + "\xEF", "tip", "UTF-8"},
       {"an overlong '/' in a link name",
        hand("j2", "revolute", ok_inner, "<link name='a\xC0\xAF'/>"), "tip", "UTF-8"},

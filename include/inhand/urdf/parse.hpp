@@ -19,7 +19,8 @@
 // tinyxml also trusts a UTF-8 lead byte: it steps over as many bytes as the lead byte
 // announces without looking for the end of the text, so a lead byte near the end (or
 // before a NUL) makes it read past the buffer (a fuzzed document: a heap overflow under
-// AddressSanitizer), and a lone 0xEF there makes its line count loop forever. Before
+// AddressSanitizer), and a lone 0xEF there made its line count loop forever (CVE-2021-42260,
+// patched in Debian's 2.6.2-6, not in every tinyxml a user links). Before
 // either parser sees it, the document must therefore be well-formed UTF-8 (RFC 3629: no
 // overlong forms, no surrogates, nothing above U+10FFFF) without NUL bytes, as XML
 // requires of a document with no declared encoding; otherwise it is refused, naming the
