@@ -34,7 +34,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 
 #include "inhand/controller/ik_report.hpp"
 #include "inhand/math/box_least_squares.hpp"
@@ -175,22 +174,18 @@ class ContactIk {
   }
 
   /// Velocity limits > 0 (NaN fails), and a box [lo, hi] (if given) of this solver's size,
-  /// finite, with lo <= 0 <= hi. One pass over the joints, without a branch per test: a
-  /// NaN fails every comparison, and -inf < lo <= 0 <= hi < +inf is "finite" for a bound
-  /// known to be <= 0 (>= 0).
+  /// finite, with lo <= 0 <= hi. One pass over the joints.
   static bool limits_valid(const JointVector& max_velocity, const JointVector* lo,
                            const JointVector* hi, int n) noexcept {
     bool ok = max_velocity.size() == n;
     const bool boxed = lo != nullptr && hi != nullptr;
     if (boxed) ok = ok && lo->size() == n && hi->size() == n;
     if (!ok) return false;
-    for (int i = 0; i < n; ++i) ok &= max_velocity(i) > Scalar(0);
+    for (int i = 0; i < n; ++i) ok = ok && max_velocity(i) > Scalar(0);
     if (boxed) {
-      constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
-      for (int i = 0; i < n; ++i) {
-        const Scalar l = (*lo)(i), h = (*hi)(i);
-        ok &= (l <= Scalar(0)) & (l > -inf) & (h >= Scalar(0)) & (h < inf);
-      }
+      for (int i = 0; i < n; ++i)
+        ok = ok && (*lo)(i) <= Scalar(0) && (*hi)(i) >= Scalar(0) && is_finite((*lo)(i)) &&
+             is_finite((*hi)(i));
     }
     return ok;
   }
