@@ -111,8 +111,8 @@ TEST(MujocoCylinder, TranslationAlongXWithinThePaperBounds) {
 // with the model's kv 0.05 N m s/rad, the controller told each (MujocoAdapter::
 // controller_config: ForceLayerParams::servo_stiffness, servo_damping). Translate X within
 // the paper bounds from 10 /s up (x50); each run recorded. Measured, not reached: 5 /s turns
-// the cylinder 35 mrad RMS at the default release grip (13 mrad before the press direction
-// used the secant stiffness; it passed with release_grip 1).
+// the cylinder 57 mrad RMS, the grasp pressing at 2.18 for release_load (docs/mujoco.md; 13
+// mrad before the press direction used the secant stiffness; it passed with release_grip 1).
 // (Before the force loop saw the servo, only 20-150 /s passed: at 10 and 200 /s the grasp
 // timed out.)
 TEST(MujocoCylinder, ServoStiffnessSweep) {
