@@ -110,9 +110,13 @@ TEST(MujocoCylinder, TranslationAlongXWithinThePaperBounds) {
 // The hand's servo over x100 in stiffness: position_gain 5-500 /s, i.e. 0.25-25 N m/rad
 // with the model's kv 0.05 N m s/rad, the controller told each (MujocoAdapter::
 // controller_config: ForceLayerParams::servo_stiffness, servo_damping). Translate X within
-// the paper bounds from 10 /s up (x50); each run recorded. Measured, not reached: 5 /s turns
-// the cylinder 57 mrad RMS, the grasp pressing at 2.18 for release_load (docs/mujoco.md; 13
-// mrad before the press direction used the secant stiffness; it passed with release_grip 1).
+// the paper bounds from 10 /s up (x50), the hold settling within the paper files' 1 s (the
+// softer the servo, the more the release rolls the cylinder and the longer the hold takes to
+// settle: measured 0.86 s at 10 /s, 0.51 s at 15 /s, 0.12 s at 50 /s, 0 from 150 /s; a
+// release_load of 6 N took 10 /s to 1.89 s, docs/force_layer.md); each run recorded.
+// Measured, not reached: 5 /s turns the cylinder 57 mrad RMS, the grasp pressing at 2.18 for
+// release_load (docs/mujoco.md; 13 mrad before the press direction used the secant
+// stiffness; it passed with release_grip 1).
 // (Before the force loop saw the servo, only 20-150 /s passed: at 10 and 200 /s the grasp
 // timed out.)
 TEST(MujocoCylinder, ServoStiffnessSweep) {
@@ -127,7 +131,9 @@ TEST(MujocoCylinder, ServoStiffnessSweep) {
     const std::string p = "servo_gain_" + std::to_string(static_cast<int>(gain));
     inhand_test::record(p + "_rms_position_m", m.rms_position_error);
     inhand_test::record(p + "_rms_orientation_rad", m.rms_orientation_error);
+    inhand_test::record(p + "_hold_settle_s", r.stages[1].settle_time);
     if (gain < 10.0) continue;
+    EXPECT_LE(r.stages[1].settle_time, 1.0);  // s, the paper files' hold bound
     EXPECT_TRUE(r.stages[0].completed);
     EXPECT_FALSE(r.dropped);
     EXPECT_EQ(r.contact_losses, 0);
