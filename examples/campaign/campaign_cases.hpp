@@ -179,6 +179,9 @@ inline Case make_case(std::uint64_t seed, bool wide = false, Shear shear = Shear
                   s.plant.contact.tangential_stiffness, 1e3 * s.plant.joint_velocity_lag,
                   s.plant.command_delay, bias.magnitude, bias.finger);
   }
+  // The hand knows which way is down (its mount's pose), not what the object weighs: the
+  // grasp sizes its grip for a step of release_load along gravity (release_grip.hpp).
+  s.controller.force_layer.gravity_direction = s.plant.gravity;
   char desc[512];
   std::snprintf(desc, sizeof desc, "%s %s m=%.0fg mu=%.2f %s %+.3f%s about/along (%.2f %.2f %.2f)",
                 hand == 0 ? "shadow" : "three", buf, 1e3 * s.object.mass, s.plant.contact.friction,

@@ -5,7 +5,8 @@
 // object (shape, size, mass), the friction coefficient, an offset of the object's
 // pose from the preset's nominal pose, and a small manipulation task (a reciprocating
 // translation along, or rotation about, a random unit axis), then runs
-// grasp (object frozen) -> release + hold 1 s -> task -> settle 0.5 s.
+// grasp (object frozen) -> release + hold 1 s -> task -> settle 0.5 s. The controller is
+// told which way gravity pulls (force_layer.gravity_direction; --gravity-unknown: not).
 // A case succeeds when the grasp completes, the object is not dropped, no contact is
 // lost, and the task stage meets the campaign bounds (see kBounds).
 // Output: one line per failing case (with its seed, and which of the warnings that say
@@ -193,6 +194,10 @@ int main(int argc, char** argv) {
                  "is sized to take without a contact falling below min_force (0: release_grip "
                  "alone)")
       ->check(CLI::Range(0.0, 1000.0));
+  bool gravity_unknown = false;
+  app.add_flag("--gravity-unknown", gravity_unknown,
+               "controller Config::force_layer.gravity_direction left zero: the hand is not told "
+               "which way gravity pulls (by default it is, not the object's weight)");
   std::string trace;
   app.add_option("--trace", trace, "per-tick trace CSV of the one case run (needs --count 1)");
   CLI11_PARSE(app, argc, argv);
@@ -216,6 +221,7 @@ int main(int argc, char** argv) {
     c.spec.controller.keep_twist_in_reach = keep_in_reach;
     c.spec.controller.at_risk_hold = at_risk_hold;
     c.spec.controller.force_layer.release_load = release_load;
+    if (gravity_unknown) c.spec.controller.force_layer.gravity_direction.setZero();
     const Outcome o = evaluate(c, trace);
     if (o.success) {
       ++ok;

@@ -276,6 +276,9 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     fl.servo_stiffness =
         f.number("servo_stiffness", fl.servo_stiffness, Range::non_negative_up_to(1e6));
     fl.servo_damping = f.number("servo_damping", fl.servo_damping, Range::non_negative_up_to(1e6));
+    const Eigen::Vector3d g = fl.gravity_direction;
+    fl.gravity_direction =
+        vec3(f.numbers("gravity_direction", {g.x(), g.y(), g.z()}, 3, Range::closed(-1e3, 1e3)));
     f.finish();
   }
   {

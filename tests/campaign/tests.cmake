@@ -98,4 +98,22 @@ if(INHAND_HAVE_CAMPAIGN)
     set_tests_properties(campaign.wide_release_grip_sized_for_the_load_${seed}
                          PROPERTIES LABELS campaign TIMEOUT 120)
   endforeach()
+  # Wide-range cases whose heavy object, released, fell onto one side of the squeeze (865: a
+  # 376 g box, gravity -Y along the thumb-fingers axis, 19 kN/m, 8.9 ms of lag; 1482: a 394 g
+  # cylinder, -Y, 48 kN/m; 3952 found in seeds 3000-3999): the fingers above it unloaded
+  # faster than their loops could follow and their contacts opened for a few ticks. Told
+  # which way gravity pulls, the grasp presses those fingers for the step's peak, twice the
+  # weight's static share for a weight of release_load (release_grip.hpp): each is kept. The
+  # same seeds with --gravity-unknown (the sizing along any direction alone) must still fail,
+  # so the pair shows the sizing along gravity is what keeps them.
+  foreach(seed 865 1482 3952)
+    add_test(NAME campaign.wide_release_grip_sized_along_gravity_${seed}
+             COMMAND inhand_campaign --wide --first-seed ${seed} --count 1 --min-success 1)
+    add_test(NAME campaign.wide_release_grip_gravity_unknown_${seed}
+             COMMAND inhand_campaign --wide --gravity-unknown --first-seed ${seed} --count 1 --min-success 0)
+    set_tests_properties(campaign.wide_release_grip_sized_along_gravity_${seed}
+                         PROPERTIES LABELS campaign TIMEOUT 120)
+    set_tests_properties(campaign.wide_release_grip_gravity_unknown_${seed} PROPERTIES
+                         LABELS campaign TIMEOUT 120 PASS_REGULAR_EXPRESSION "seed +${seed} FAIL")
+  endforeach()
 endif()

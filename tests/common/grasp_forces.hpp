@@ -4,8 +4,9 @@
 // configuration (preset fingers nominal_force, balancing fingers what cancels the
 // resultant), scaled by s_g: force_layer.release_grip, or more where a load of
 // force_layer.release_load along any direction would take some finger below min_force
-// under the equal-stiffness translation response (grasp.hpp "Release grip"), or less so
-// that none exceeds max_force. Units: N.
+// under the equal-stiffness translation response, or twice release_load along
+// force_layer.gravity_direction where it is set (release_grip.hpp), or less so that none
+// exceeds max_force. Units: N.
 #pragma once
 
 #include <algorithm>
@@ -39,10 +40,19 @@ std::vector<Scalar> grasp_forces(const Config& config, const Targets& targets) {
   Eigen::Matrix<Scalar, Dim, Dim> G =
       config.force_layer.rigid_tolerance * Eigen::Matrix<Scalar, Dim, Dim>::Identity();
   for (int i = 0; i < n; ++i) G += normals.col(i) * normals.col(i).transpose();
+  // Along gravity (a planar hand: its part in the plane): the fingers the weight unloads,
+  // each by twice its static share.
+  inhand::Vector<Scalar, Dim> g = config.force_layer.gravity_direction.template head<Dim>();
+  if (g.norm() > Scalar(1e-6))
+    g.normalize();
+  else
+    g.setZero();
+  const inhand::Vector<Scalar, Dim> share = G.ldlt().solve(g);
   Scalar wanted = static_cast<Scalar>(config.force_layer.release_grip);
   for (int i = 0; i < n; ++i) {
-    const Scalar loss =
-        config.force_layer.release_load * G.ldlt().solve(normals.col(i).eval()).norm();
+    const Scalar any = G.ldlt().solve(normals.col(i).eval()).norm();
+    const Scalar along = Scalar(2) * std::max(Scalar(0), -normals.col(i).dot(share));
+    const Scalar loss = config.force_layer.release_load * std::max(any, along);
     if (f(i) > Scalar(0)) wanted = std::max(wanted, (config.force_planner.min_force + loss) / f(i));
   }
   const Scalar scale = std::min(wanted, config.force_planner.max_force / f.maxCoeff());

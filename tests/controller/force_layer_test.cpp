@@ -715,6 +715,11 @@ TEST(ForceLayer, ParamsNameTheField) {
   p = {};
   p.servo_damping = std::numeric_limits<double>::infinity();
   EXPECT_STREQ(p.validate().field, "force_layer.servo_damping");
+  p = {};
+  p.gravity_direction = Eigen::Vector3d(0.0, 0.0, -9.81);  // any length
+  EXPECT_TRUE(p.validate().ok());
+  p.gravity_direction.x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_STREQ(p.validate().field, "force_layer.gravity_direction");
 }
 
 }  // namespace

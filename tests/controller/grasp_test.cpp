@@ -105,9 +105,12 @@ TEST(ApproachVelocity, KeepsCreepingPastTheExpectedContactPoint) {
 
 // release_grip_scale: with s = the returned scale and no cap binding, every finger keeps
 // at least min_force under the equal-stiffness translation response to any load w with
-// |w| <= release_load (force change n_i^T G^-1 w, grasp.hpp "Release grip"), the bound
-// is reached by the finger that sets s (for w along -G^-1 n_i), s >= release_grip, and
-// no s q_i exceeds max_force.
+// |w| <= release_load (force change n_i^T G^-1 w, release_grip.hpp), and, in the cases
+// with gravity_direction set (g: a random 3-vector, a planar hand taking its x and y), at
+// the peak of a weight's step along g, twice the static change, for any weight up to
+// release_load; the bound is reached by the finger that sets s (for w along -G^-1 n_i, or
+// the weight release_load along g), s >= release_grip, s is at least the scale without g,
+// and no s q_i exceeds max_force.
 template <int Dim>
 void check_release_grip_scale(std::uint64_t seed) {
   using Vec = inhand::Vector<double, Dim>;
@@ -116,7 +119,7 @@ void check_release_grip_scale(std::uint64_t seed) {
   std::uniform_int_distribution<int> count(2, 5);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const int cases = scaled(500);
-  int binding = 0, capped = 0;
+  int binding = 0, capped = 0, along_gravity = 0;
   double worst_margin = 1e9;
   for (int k = 0; k < cases; ++k) {
     const int n = count(rng);
@@ -132,8 +135,18 @@ void check_release_grip_scale(std::uint64_t seed) {
     fl.rigid_tolerance = 0.01 + 0.3 * unit(rng);
     const double min_force = 0.5 * unit(rng);
     const double max_force = k % 4 == 0 ? 3.0 : 1e3;  // a quarter of the cases with a low cap
+    const inhand::ReleaseGrip<double> unknown =
+        inhand::release_grip_scale(N, q, fl, min_force, max_force);
+    Vec g = Vec::Zero();  // unit, in the hand's space
+    if (k % 2 == 1) {
+      fl.gravity_direction =
+          (0.1 + 10.0 * unit(rng)) * inhand_test::random_unit_vector<double, 3>(rng);
+      g = fl.gravity_direction.template head<Dim>();
+      g = g.norm() > 1e-9 * (1.0 + fl.gravity_direction.norm()) ? Vec(g.normalized()) : Vec::Zero();
+    }
     const inhand::ReleaseGrip<double> rg =
         inhand::release_grip_scale(N, q, fl, min_force, max_force);
+    EXPECT_GE(rg.scale, unknown.scale * (1 - 1e-12)) << "case " << k;
     const double s = rg.scale;
     ASSERT_TRUE(std::isfinite(s));
     for (int i = 0; i < n; ++i) ASSERT_LE(s * q(i), max_force * (1 + 1e-12));
@@ -146,7 +159,7 @@ void check_release_grip_scale(std::uint64_t seed) {
     Mat G = fl.rigid_tolerance * Mat::Identity();
     for (int i = 0; i < n; ++i) G += N.col(i) * N.col(i).transpose();
     const Mat G_inv = G.inverse();
-    double tightest = 1e9;
+    double tightest = 1e9, tightest_g = 1e9;
     for (int i = 0; i < n; ++i) {
       const Vec worst = -fl.release_load * (G_inv * N.col(i)).normalized();  // largest loss
       for (int trial = 0; trial < 20; ++trial) {
@@ -157,15 +170,25 @@ void check_release_grip_scale(std::uint64_t seed) {
         EXPECT_GE(f, min_force - 1e-9) << "finger " << i << " case " << k;
         if (trial == 0) tightest = std::min(tightest, f - min_force);
       }
+      for (const double weight : {fl.release_load, fl.release_load * unit(rng)}) {
+        const double peak = s * q(i) + 2.0 * weight * N.col(i).dot(G_inv * g);
+        EXPECT_GE(peak, min_force - 1e-9) << "finger " << i << " case " << k;
+        if (weight == fl.release_load) tightest_g = std::min(tightest_g, peak - min_force);
+      }
     }
+    const bool set_by_gravity = tightest_g < tightest - 1e-12;
+    tightest = std::min(tightest, tightest_g);
     worst_margin = std::min(worst_margin, tightest);
     if (s > fl.release_grip * (1 + 1e-9) && fl.release_load > 0) {
       EXPECT_NEAR(tightest, 0.0, 1e-9) << "case " << k;  // the finger that sets s is at min_force
       ++binding;
+      along_gravity += set_by_gravity ? 1 : 0;
     }
   }
   record("release_grip_scale.cases_sized_by_the_load", binding);
+  record("release_grip_scale.cases_sized_along_gravity", along_gravity);
   record("release_grip_scale.cases_capped", capped);
+  EXPECT_GT(along_gravity, cases / 20);  // and the weight's step along g sets some of them
   EXPECT_GT(binding, cases / 10);  // the sweep exercises the load bound, not only release_grip
   EXPECT_GT(capped, 0);
 }
@@ -255,26 +278,59 @@ TEST(ReleaseGripScale, EveryFingerKeepsMinForceUnderTheLoadSpatial) {
   check_release_grip_scale<3>(22);
 }
 
-TEST(ReleaseGripScale, OpposedPairAndNoLoad) {
-  // Two opposed fingers along x with q = 1 N: G = diag(2 + eps, eps, eps), so a load along
-  // x takes |w| / (2 + eps) from one finger. With 4 N, eps 0.1, min_force 0.2:
-  // s = 0.2 + 4 / 2.1 = 2.105 (above release_grip 2). With no load: release_grip.
-  Eigen::Matrix<double, 3, 2> N;
-  N.col(0) = Eigen::Vector3d::UnitX();
-  N.col(1) = -Eigen::Vector3d::UnitX();
-  const Eigen::Vector2d q(1.0, 1.0);
+/// Two opposed fingers along x in Dim dimensions (outward normals +x and -x) with q = 1 N,
+/// and release_grip 2, release_load 4 N, eps 0.1: G = diag(2.1, 0.1[, 0.1]).
+template <int Dim>
+struct OpposedPair {
+  Eigen::Matrix<double, Dim, 2> N;
+  Eigen::Vector2d q{1.0, 1.0};
   inhand::ForceLayerParams<double> fl;
-  fl.release_grip = 2.0;
-  fl.release_load = 4.0;
-  fl.rigid_tolerance = 0.1;
-  EXPECT_NEAR(inhand::release_grip_scale(N, q, fl, 0.2, 6.0).scale, 0.2 + 4.0 / 2.1, 1e-12);
-  EXPECT_FALSE(inhand::release_grip_scale(N, q, fl, 0.2, 6.0).capped);
+  OpposedPair() {
+    N.col(0) = inhand::Vector<double, Dim>::UnitX();
+    N.col(1) = -inhand::Vector<double, Dim>::UnitX();
+    fl.release_grip = 2.0;
+    fl.release_load = 4.0;
+    fl.rigid_tolerance = 0.1;
+  }
+  inhand::ReleaseGrip<double> scale(double max_force) const {
+    return inhand::release_grip_scale(N, q, fl, 0.2, max_force);
+  }
+};
+
+TEST(ReleaseGripScale, OpposedPairAlongAndAcrossGravity) {
+  // min_force 0.2 N. Gravity along -x unloads the finger whose outward normal is +x by
+  // W / 2.1 statically, 2 W / 2.1 at the step's peak: s = 0.2 + 8 / 2.1. Gravity along y
+  // (carried by friction) unloads neither: s as with gravity unknown, 0.2 + 4 / 2.1 from
+  // the load along any direction. Any length; a planar hand ignores z.
+  OpposedPair<3> p;
+  p.fl.gravity_direction = Eigen::Vector3d(-9.81, 0.0, 0.0);
+  EXPECT_NEAR(p.scale(6.0).scale, 0.2 + 8.0 / 2.1, 1e-12);
+  p.fl.gravity_direction = Eigen::Vector3d(0.0, 1.0, 0.0);
+  EXPECT_NEAR(p.scale(6.0).scale, 0.2 + 4.0 / 2.1, 1e-12);
+  OpposedPair<2> planar;
+  planar.fl.gravity_direction = Eigen::Vector3d(-1.0, 0.0, -5.0);  // in the plane: -x
+  EXPECT_NEAR(planar.scale(6.0).scale, 0.2 + 8.0 / 2.1, 1e-12);
+  planar.fl.gravity_direction = Eigen::Vector3d(0.0, 0.0, -9.81);  // normal to the plane
+  EXPECT_NEAR(planar.scale(6.0).scale, 0.2 + 4.0 / 2.1, 1e-12);
+  // Capped by max_force 3 N and said so.
+  p.fl.gravity_direction = Eigen::Vector3d(-1.0, 0.0, 0.0);
+  EXPECT_DOUBLE_EQ(p.scale(3.0).scale, 3.0);
+  EXPECT_TRUE(p.scale(3.0).capped);
+}
+
+TEST(ReleaseGripScale, OpposedPairAndNoLoad) {
+  // A load along x takes |w| / (2 + eps) from one finger. With 4 N, eps 0.1, min_force 0.2:
+  // s = 0.2 + 4 / 2.1 = 2.105 (above release_grip 2). With no load: release_grip.
+  OpposedPair<3> p;
+  inhand::ForceLayerParams<double>& fl = p.fl;
+  EXPECT_NEAR(p.scale(6.0).scale, 0.2 + 4.0 / 2.1, 1e-12);
+  EXPECT_FALSE(p.scale(6.0).capped);
   fl.release_load = 0.0;
-  EXPECT_DOUBLE_EQ(inhand::release_grip_scale(N, q, fl, 0.2, 6.0).scale, 2.0);
+  EXPECT_DOUBLE_EQ(p.scale(6.0).scale, 2.0);
   // The cap: max_force 1.5 N with q = 1 N allows s = 1.5 only, and says so.
   fl.release_load = 4.0;
-  EXPECT_DOUBLE_EQ(inhand::release_grip_scale(N, q, fl, 0.2, 1.5).scale, 1.5);
-  EXPECT_TRUE(inhand::release_grip_scale(N, q, fl, 0.2, 1.5).capped);
+  EXPECT_DOUBLE_EQ(p.scale(1.5).scale, 1.5);
+  EXPECT_TRUE(p.scale(1.5).capped);
 }
 
 TEST(GraspParams, ValidationNamesTheField) {

@@ -288,6 +288,23 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   EXPECT_EQ(s.tolerances.settle_orientation_tolerance, 0.02);
 }
 
+TEST(ScenarioJson, ForceLayerGravityDirectionIsAppliedAndChecked) {
+  Json j = base_scenario();
+  j["controller"] = ex::parse_json_text(
+      R"({"force_layer": {"release_load": 3, "gravity_direction": [0, -9.81, 0]}})");
+  const ex::ScenarioFile f = ex::parse_scenario(j);
+  EXPECT_EQ(f.spec.controller.force_layer.release_load, 3.0);
+  EXPECT_EQ(f.spec.controller.force_layer.gravity_direction, Eigen::Vector3d(0, -9.81, 0));
+  j["controller"]["force_layer"]["gravity_direction"] = ex::parse_json_text("[0, 1]");
+  const std::string short_msg = parse_error(j);
+  EXPECT_NE(short_msg.find("controller.force_layer.gravity_direction"), std::string::npos)
+      << short_msg;
+  j["controller"]["force_layer"]["gravity_direction"] = ex::parse_json_text("[0, 0, 1e9]");
+  const std::string range_msg = parse_error(j);
+  EXPECT_NE(range_msg.find("controller.force_layer.gravity_direction"), std::string::npos)
+      << range_msg;
+}
+
 TEST(ScenarioJson, SegmentsBecomeWorldFrameDisplacements) {
   Json j = base_scenario();
   j["stages"][2]["segments"] = ex::parse_json_text(R"([
@@ -467,6 +484,7 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
         fb.servo_stiffness,  fb.servo_damping,   fb.release_load};
     for (std::size_t k = 0; k < 19; ++k)
       EXPECT_EQ(got_fl[k], want_fl[k]) << "force_layer field " << k;
+    EXPECT_EQ(fa.gravity_direction, fb.gravity_direction);
   }
   EXPECT_EQ(c.outlier_gates.max_object_speed, dc.outlier_gates.max_object_speed);
   EXPECT_EQ(c.outlier_gates.max_object_angular_speed, dc.outlier_gates.max_object_angular_speed);

@@ -38,6 +38,10 @@ struct ForceLayerParams {
   /// the two store a force along n (between J J^T n and n, weighted by their compliances).
   Scalar servo_stiffness = Scalar(0);
   Scalar servo_damping = Scalar(0);
+  /// The direction gravity pulls in, world frame (x, y, z; a planar hand takes x and y),
+  /// any length; all zero (the default): unknown. When known, the grasp's grip is also
+  /// sized for the step of a weight of up to release_load along it (release_grip.hpp).
+  Vector<Scalar, 3> gravity_direction = Vector<Scalar, 3>::Zero();
 
   Validation validate() const noexcept {
     const Scalar inf = std::numeric_limits<Scalar>::infinity();
@@ -75,6 +79,8 @@ struct ForceLayerParams {
             f.name, f.lo_open ? "must be finite and > its lower bound (see the header)"
                               : "must be finite and >= its lower bound (see the header)");
     }
+    if (!all_finite(gravity_direction))
+      return Validation::invalid("force_layer.gravity_direction", "must be finite");
     return Validation::valid();
   }
 };

@@ -64,20 +64,8 @@
 // During manipulation a finger that loses contact re-approaches along its last
 // measured normal, aiming at its last contact point carried rigidly with the measured
 // object pose, and is reported as `reacquiring` until it touches again.
-// Release grip. Released, the object's load w [N] (its weight, say) arrives as a step
-// and is first carried by the contacts' compression: a translation d of the object
-// presses it by n_i^T d into finger i (n_i outward), which with equal contact stiffness
-// k changes the finger's normal force by k n_i^T d; balancing w (sum_i k n_i n_i^T d = w)
-// gives d = (k G)^-1 w, G = sum_i n_i n_i^T + eps I, so finger i's force changes by
-// n_i^T G^-1 w: it loses up to |w| |G^-1 n_i| [N] (w along -G^-1 n_i). eps =
-// rigid_tolerance: a direction the normals barely span (eigenvalue of sum n n^T below
-// eps) is carried by friction, as in the force layer's split (force_layer.hpp). Finger i
-// keeps min_force under any load up to release_load when
-// s q_i >= min_force + release_load |G^-1 n_i|. k cancels: the sizing is the same from
-// soft to stiff contacts. A grip capped by max_force is warned during the grasp
-// (release_grip_capped); the load beyond it meets the force layer's slip and capacity
-// flags. Not covered: the load's moment about the contacts (the object
-// turning on them), and friction's share, which the normals' geometry does not give.
+// Release grip: release_grip.hpp (the grip the grasp presses with, sized for the load
+// that arrives at release).
 // Units: m, m/s, s, N; all points and normals in the world frame.
 #pragma once
 
@@ -85,6 +73,7 @@
 #include <cmath>
 
 #include "inhand/controller/force_layer_params.hpp"
+#include "inhand/controller/release_grip.hpp"
 #include "inhand/math/status.hpp"
 #include "inhand/math/types.hpp"
 
@@ -167,45 +156,6 @@ struct GraspTarget {
     return Validation::valid();
   }
 };
-
-/// The grasp's grip scale s_g and whether max_force lowered it (release_grip_scale).
-template <typename Scalar>
-struct ReleaseGrip {
-  Scalar scale = Scalar(1);  ///< s_g, dimensionless
-  bool capped = false;       ///< s_g is below what release_grip / release_load ask
-};
-
-/// The grip scale s_g of the grasp (file comment, "Release grip"): for normals (Dim x n,
-/// the object's outward unit normals, world) and the pattern q (n, N), the largest of
-/// `release_grip` and (min_force + release_load |G^-1 n_i|) / q_i over the fingers with
-/// q_i > 0, then lowered until no s_g q_i exceeds max_force (`capped`: a load of
-/// release_load may then take some finger below min_force, or release_grip is not met).
-/// noexcept, no allocation (a Dim x Dim inverse).
-template <typename Scalar, typename DerivedN, typename DerivedQ>
-inline ReleaseGrip<Scalar> release_grip_scale(const Eigen::MatrixBase<DerivedN>& normals,
-                                              const Eigen::MatrixBase<DerivedQ>& pattern,
-                                              const ForceLayerParams<Scalar>& fl, Scalar min_force,
-                                              Scalar max_force) noexcept {
-  constexpr int Dim = DerivedN::RowsAtCompileTime;
-  using Mat = Eigen::Matrix<Scalar, Dim, Dim>;
-  const int n = static_cast<int>(pattern.size());
-  Mat G = fl.rigid_tolerance * Mat::Identity();
-  for (int i = 0; i < n; ++i) G.noalias() += normals.col(i) * normals.col(i).transpose();
-  const Mat G_inv = G.inverse();
-  ReleaseGrip<Scalar> r;
-  r.scale = fl.release_grip;
-  for (int i = 0; i < n; ++i)
-    if (pattern(i) > Scalar(0))
-      r.scale = std::max(
-          r.scale, (min_force + fl.release_load * (G_inv * normals.col(i)).norm()) / pattern(i));
-  for (int i = 0; i < n; ++i) {
-    if (r.scale * pattern(i) > max_force) {
-      r.scale = max_force / pattern(i);
-      r.capped = true;
-    }
-  }
-  return r;
-}
 
 /// Approach velocity of a virtual contact point p_v towards target p_t with the
 /// expected outward normal n: saturated P term plus creep along -n. Once p_v is past
