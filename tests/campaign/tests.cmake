@@ -91,7 +91,7 @@ if(INHAND_HAVE_CAMPAIGN)
   # the three-finger hand (114: 395 g, 634: 343 g, 792: 367 g), whose released weight took
   # a finger's whole grip at release_grip 2. The grasp now presses with a grip sized so
   # that release_load (4 N) along any direction leaves every finger min_force
-  # (controller/grasp.hpp, "Release grip"); with --release-load 0 each fails again.
+  # (controller/release_grip.hpp); with --release-load 0 each fails again.
   foreach(seed 114 634 792)
     add_test(NAME campaign.wide_release_grip_sized_for_the_load_${seed}
              COMMAND inhand_campaign --wide --fixed-shear-stiffness --first-seed ${seed} --count 1 --min-success 1)

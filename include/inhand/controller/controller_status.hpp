@@ -118,7 +118,7 @@ enum class ControllerWarning : unsigned {
   /// error along the cut (Config::keep_twist_in_reach, at_risk_hold)
   workspace_cut = 1u << 18,
   /// grasp phase: max_force holds the grasp's grip s_g below what release_grip and
-  /// release_load ask (grasp.hpp "Release grip"): released, a load of release_load along
+  /// release_load ask (release_grip.hpp): released, a load of release_load along
   /// some direction may open a contact
   release_grip_capped = 1u << 19,
   /// manipulation: some touching finger measures more than force_planner.max_force, which

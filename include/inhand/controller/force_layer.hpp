@@ -41,7 +41,7 @@
 //
 // Grip that follows the load. s is the largest of
 //   1                 the nominal grip (the planner's pattern);
-//   s_release         Step::release_grip (the grasp's s_g, grasp.hpp; 0: release_grip) on
+//   s_release         Step::release_grip (the grasp's s_g, release_grip.hpp; 0: release_grip) on
 //                     the first free tick, decaying to 1 like s_slip: the load the grasp
 //                     could not feel (the object was held) arrives at release as a step,
 //                     faster than a slip is felt and answered, so the grip meets it raised;

@@ -1,5 +1,5 @@
 // The grip the grasp presses with, sized for the load that arrives at release (grasp.hpp:
-// a placed finger presses with f_g = s_g q_g; docs/force_layer.md, "Release grip").
+// a placed finger presses with f_g = s_g q_g; docs/force_layer.md, after its parameter table).
 //
 // Released, the object's load w [N] (its weight, say) arrives as a step and is first
 // carried by the contacts' compression: a translation d of the object presses it by
