@@ -198,6 +198,12 @@ int main(int argc, char** argv) {
   app.add_flag("--gravity-unknown", gravity_unknown,
                "controller Config::force_layer.gravity_direction left zero: the hand is not told "
                "which way gravity pulls (by default it is, not the object's weight)");
+  double gravity_tilt = inhand::plant::HandController::Config{}.grasp.gravity_tilt;
+  app.add_option("--gravity-tilt", gravity_tilt,
+                 "controller Config::grasp.gravity_tilt (rad): how far a pressing grasp finger "
+                 "aims its normal towards gravity when told which way it pulls (0: at the "
+                 "target's normal)")
+      ->check(CLI::Range(0.0, 0.7853981633974483));
   std::string trace;
   app.add_option("--trace", trace, "per-tick trace CSV of the one case run (needs --count 1)");
   CLI11_PARSE(app, argc, argv);
@@ -222,6 +228,7 @@ int main(int argc, char** argv) {
     c.spec.controller.at_risk_hold = at_risk_hold;
     c.spec.controller.force_layer.release_load = release_load;
     if (gravity_unknown) c.spec.controller.force_layer.gravity_direction.setZero();
+    c.spec.controller.grasp.gravity_tilt = gravity_tilt;
     const Outcome o = evaluate(c, trace);
     if (o.success) {
       ++ok;

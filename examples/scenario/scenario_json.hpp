@@ -317,6 +317,10 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     gp.settle_time = g.number("settle_time", gp.settle_time, Range::non_negative_up_to(100.0));
     gp.slide_force_fraction =
         g.number("slide_force_fraction", gp.slide_force_fraction, Range::positive_up_to(1.0));
+    gp.gravity_tilt =
+        g.number("gravity_tilt", gp.gravity_tilt, Range::non_negative_up_to(0.7853981633974483));
+    gp.flat_curvature =
+        g.number("flat_curvature", gp.flat_curvature, Range::non_negative_up_to(1e6));
     g.finish();
   }
   r.finish();

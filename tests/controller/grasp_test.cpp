@@ -1,8 +1,9 @@
 // Tests of the grasp-phase primitives (controller/grasp.hpp): approach_velocity's
 // saturation and its creep along -n (also past the expected contact point, when the
 // object is smaller than expected), the release grip's sizing against the load it must
-// take, the balancing finger's shift to where the squeeze has no couple, parameter and
-// target validation.
+// take, the balancing finger's shift to where the squeeze has no couple, the pressing
+// finger's aim at gravity's side (and its release on a flat face), parameter and target
+// validation.
 #include "inhand/controller/grasp.hpp"
 
 #include <gtest/gtest.h>
@@ -12,6 +13,8 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "common/test_support.hpp"
@@ -333,6 +336,149 @@ TEST(ReleaseGripScale, OpposedPairAndNoLoad) {
   EXPECT_TRUE(p.scale(1.5).capped);
 }
 
+// The aimed normal (grasp.hpp, "Gravity's side"): a unit vector in the plane of n_t and g,
+// turned from n_t towards g by atan(tan(tilt) |g_p|) (the full tilt with g in the tangent
+// plane, none with g along n_t or unknown).
+template <int Dim>
+void check_gravity_side_normal(std::uint64_t seed) {
+  using Vec = inhand::Vector<double, Dim>;
+  auto rng = inhand_test::make_rng(seed);
+  GraspParams<double> g;
+  for (int k = 0; k < scaled(2000); ++k) {
+    g.gravity_tilt = std::uniform_real_distribution<double>(0.0, 0.78)(rng);
+    const Vec n_t = inhand_test::random_unit_vector<double, Dim>(rng);
+    const Vec grav = inhand_test::random_unit_vector<double, Dim>(rng);
+    const Vec a = inhand::gravity_side_normal(n_t, grav, g.gravity_tilt);
+    EXPECT_NEAR(a.norm(), 1.0, 1e-12);
+    if constexpr (Dim == 3) {
+      EXPECT_NEAR(a.dot(n_t.cross(grav)), 0.0, 1e-12);  // in their plane
+    }
+    const Vec g_p = grav - grav.dot(n_t) * n_t;
+    EXPECT_NEAR(std::acos(std::min(1.0, a.dot(n_t))),
+                std::atan(std::tan(g.gravity_tilt) * g_p.norm()), 1e-6);
+    EXPECT_GE(a.dot(grav), n_t.dot(grav) - 1e-12);  // turned towards g
+    EXPECT_LT((inhand::gravity_side_normal(n_t, Vec(Vec::Zero()), g.gravity_tilt) - n_t).norm(),
+              1e-15);
+    EXPECT_LT((inhand::gravity_side_normal(n_t, Vec(-n_t), g.gravity_tilt) - n_t).norm(), 1e-15);
+  }
+}
+
+TEST(GravitySideNormal, TurnsTowardsGravityByUpToTheTiltPlanar) {
+  check_gravity_side_normal<2>(41);
+}
+TEST(GravitySideNormal, TurnsTowardsGravityByUpToTheTiltSpatial) {
+  check_gravity_side_normal<3>(42);
+}
+
+// A pressing finger on a surface, closed loop: its contact slides by the tangential part of
+// press_step's velocity each millisecond until placed (at most 5 s). `surface` maps a point
+// near it to (the point on it, its outward normal). Returns the placed contact.
+struct Placed {
+  Eigen::Vector3d point, normal;
+  bool placed = false, gravity_side = true;
+};
+/// A model-free target: on the object's axis (the origin), expected normal +y.
+GraspTarget<double, 3> axis_target() {
+  GraspTarget<double, 3> target;
+  target.contact_point.setZero();
+  target.normal = Eigen::Vector3d::UnitY();
+  return target;
+}
+/// A cylinder of radius R about the x axis.
+auto cylinder_surface(double R) {
+  return [R](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d n = Eigen::Vector3d(0.0, p.y(), p.z()).normalized();
+    return std::make_pair(Eigen::Vector3d(p.x(), R * n.y(), R * n.z()), n);
+  };
+}
+template <typename Surface>
+Placed press_until_placed(const GraspParams<double>& g, const Eigen::Vector3d& start,
+                          const Eigen::Vector3d& gravity, Surface&& surface,
+                          const GraspTarget<double, 3>& target = axis_target()) {
+  inhand::SettleWindow<double, 3> window;
+  Placed r;
+  std::tie(r.point, r.normal) = surface(start);
+  for (int k = 0; k < 5000 && !r.placed; ++k) {
+    const auto step = inhand::press_step(g, target, r.point, r.normal, gravity, 1e-3, window);
+    r.placed = step.placed;
+    const Eigen::Vector3d v = step.velocity - step.velocity.dot(r.normal) * r.normal;
+    std::tie(r.point, r.normal) = surface(Eigen::Vector3d(r.point + 1e-3 * v));
+  }
+  r.gravity_side = window.gravity_side;
+  return r;
+}
+
+// On a cylinder (radius 20 mm, axis x) a finger that touches 0.4 rad below or above the
+// equator ends 0.05-0.1 rad on gravity's side (gravity -z: below) with the defaults (within
+// alignment_tolerance / 2 of the aim, from either side), and at
+// the tolerance's edge on its own side with gravity unknown.
+TEST(PressStep, EndsOnGravitysSideOfACurvedObject) {
+  const double R = 0.02;
+  const auto cylinder = cylinder_surface(R);
+  const GraspParams<double> g;
+  for (const double side : {-1.0, 1.0}) {
+    const Eigen::Vector3d start(0.0, R * std::cos(0.4), side * R * std::sin(0.4));
+    const Placed told = press_until_placed(g, start, -Eigen::Vector3d::UnitZ(), cylinder);
+    ASSERT_TRUE(told.placed) << side;
+    EXPECT_TRUE(told.gravity_side) << side;
+    const double below = -std::asin(told.normal.z());  // rad towards gravity
+    EXPECT_GE(below, g.gravity_tilt - 0.5 * g.alignment_tolerance - 1e-3) << side;
+    EXPECT_LE(below, g.gravity_tilt + 0.5 * g.alignment_tolerance + 1e-3) << side;
+    const Placed unknown = press_until_placed(g, start, Eigen::Vector3d::Zero(), cylinder);
+    ASSERT_TRUE(unknown.placed) << side;
+    EXPECT_NEAR(std::asin(unknown.normal.z()), side * g.alignment_tolerance, 2e-3) << side;
+  }
+}
+
+// Where the surface cannot turn the normal towards gravity -- a flat face across it, or
+// the cylinder with gravity along its axis -- the finger is placed within
+// position_tolerance of its target; one that slides there over the face stops aiming at
+// gravity's side (the flat test).
+TEST(PressStep, DropsTheTiltWhereTheSurfaceCannotTurnTheNormal) {
+  const GraspParams<double> g;
+  auto face = [](const Eigen::Vector3d& p) {
+    return std::make_pair(Eigen::Vector3d(p.x(), 0.01, p.z()), Eigen::Vector3d::UnitY().eval());
+  };
+  const Placed on_face =
+      press_until_placed(g, Eigen::Vector3d(0.0, 0.01, -0.005), -Eigen::Vector3d::UnitZ(), face);
+  ASSERT_TRUE(on_face.placed);
+  EXPECT_FALSE(on_face.gravity_side);
+  EXPECT_LE(std::abs(on_face.point.z()), g.position_tolerance);
+  const double R = 0.02;
+  const auto cylinder = cylinder_surface(R);
+  const Placed along_axis =
+      press_until_placed(g, Eigen::Vector3d(0.0, R, 0.0), Eigen::Vector3d::UnitX(), cylinder);
+  ASSERT_TRUE(along_axis.placed);  // by the scaled tilt or the flat test, near its target
+  EXPECT_LE(std::abs(along_axis.point.x()), g.position_tolerance);
+  // With the flat test off (flat_curvature 0) the face keeps the tilt, which the finger
+  // cannot reach; the tilt's scaling by the point's miss still holds it within
+  // position_tolerance of its target (on gravity's side), where it is placed.
+  GraspParams<double> keep = g;
+  keep.flat_curvature = 0.0;
+  const Placed kept =
+      press_until_placed(keep, Eigen::Vector3d(0.0, 0.01, -0.005), -Eigen::Vector3d::UnitZ(), face);
+  ASSERT_TRUE(kept.placed);
+  EXPECT_TRUE(kept.gravity_side);
+  EXPECT_LT(kept.point.z(), -0.1 * g.position_tolerance);
+  EXPECT_GE(kept.point.z(), -g.position_tolerance);
+}
+
+// A surface target on the cylinder (the contact point itself, not the axis): the tilt
+// takes the contact no farther than position_tolerance from it.
+TEST(PressStep, KeepsASurfaceTargetWithinPositionTolerance) {
+  const double R = 0.02;
+  const auto cylinder = cylinder_surface(R);
+  const GraspParams<double> g;
+  GraspTarget<double, 3> target;
+  target.contact_point = Eigen::Vector3d(0.0, R, 0.0);
+  target.normal = Eigen::Vector3d::UnitY();
+  const Placed r =
+      press_until_placed(g, target.contact_point, -Eigen::Vector3d::UnitZ(), cylinder, target);
+  ASSERT_TRUE(r.placed);
+  EXPECT_LT(r.point.z(), 0.0);  // towards gravity
+  EXPECT_LE((r.point - target.contact_point).norm(), g.position_tolerance);
+}
+
 TEST(GraspParams, ValidationNamesTheField) {
   struct Case {
     const char* field;
@@ -346,6 +492,12 @@ TEST(GraspParams, ValidationNamesTheField) {
       {"grasp.tangential_gain", [](GraspParams<double>& g) { g.tangential_gain = -1; }},
       {"grasp.force_tolerance", [](GraspParams<double>& g) { g.force_tolerance = 0; }},
       {"grasp.settle_time", [](GraspParams<double>& g) { g.settle_time = -0.1; }},
+      {"grasp.gravity_tilt", [](GraspParams<double>& g) { g.gravity_tilt = -0.1; }},
+      {"grasp.gravity_tilt", [](GraspParams<double>& g) { g.gravity_tilt = 0.8; }},
+      {"grasp.gravity_tilt", [](GraspParams<double>& g) { g.gravity_tilt = kNaN; }},
+      {"grasp.flat_curvature", [](GraspParams<double>& g) { g.flat_curvature = -1; }},
+      {"grasp.flat_curvature",
+       [](GraspParams<double>& g) { g.flat_curvature = std::numeric_limits<double>::infinity(); }},
   };
   EXPECT_TRUE(GraspParams<double>{}.validate().ok());
   for (const Case& c : cases) {

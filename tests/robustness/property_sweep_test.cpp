@@ -119,6 +119,13 @@ void randomise_config(typename Ctrl::Config& c, Rng& rng, bool settle_zero) {
   g.force_tolerance = uniform<S>(rng, S(0.02), S(0.5));
   g.settle_time = settle_zero ? S(0) : uniform<S>(rng, S(0), S(0.2));
   g.slide_force_fraction = uniform<S>(rng, S(0.05), S(1));
+  g.gravity_tilt = uniform<S>(rng, S(0), S(0.5));
+  g.flat_curvature = uniform<S>(rng, S(0), S(50));
+  // Gravity told in half the cases (the grasp then aims at its side, grasp.hpp).
+  if (uniform<double>(rng, 0, 1) < 0.5)
+    c.force_layer.gravity_direction = {uniform<S>(rng, S(-10), S(10)),
+                                       uniform<S>(rng, S(-10), S(10)),
+                                       uniform<S>(rng, S(-10), S(10))};
   for (auto& f : c.fingers)
     f.kinematics = uniform<double>(rng, 0, 1) < 0.3 ? Ctrl::KinematicsSource::external
                                                     : Ctrl::KinematicsSource::chain;

@@ -178,7 +178,8 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
                         "filter_time": 0.03},
       "grasp": {"approach_gain": 3, "approach_speed": 0.02, "creep_speed": 0.004, "tangential_gain": 4,
                 "force_tolerance": 0.15, "position_tolerance": 2e-3, "alignment_speed": 0.05,
-                "alignment_tolerance": 0.1, "settle_time": 0.2, "slide_force_fraction": 0.5}})");
+                "alignment_tolerance": 0.1, "settle_time": 0.2, "slide_force_fraction": 0.5,
+                "gravity_tilt": 0.2, "flat_curvature": 20}})");
   j["tolerances"] = ex::parse_json_text(
       R"({"drop_distance": 0.03, "settle_position_tolerance": 1e-3, "settle_orientation_tolerance": 0.02})");
   j["faults"] = ex::parse_json_text(R"([
@@ -283,6 +284,8 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   EXPECT_EQ(c.grasp.alignment_tolerance, 0.1);
   EXPECT_EQ(c.grasp.settle_time, 0.2);
   EXPECT_EQ(c.grasp.slide_force_fraction, 0.5);
+  EXPECT_EQ(c.grasp.gravity_tilt, 0.2);
+  EXPECT_EQ(c.grasp.flat_curvature, 20);
   EXPECT_EQ(s.tolerances.drop_distance, 0.03);
   EXPECT_EQ(s.tolerances.settle_position_tolerance, 1e-3);
   EXPECT_EQ(s.tolerances.settle_orientation_tolerance, 0.02);
@@ -525,6 +528,8 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
   EXPECT_EQ(c.grasp.alignment_tolerance, dc.grasp.alignment_tolerance);
   EXPECT_EQ(c.grasp.settle_time, dc.grasp.settle_time);
   EXPECT_EQ(c.grasp.slide_force_fraction, dc.grasp.slide_force_fraction);
+  EXPECT_EQ(c.grasp.gravity_tilt, dc.grasp.gravity_tilt);
+  EXPECT_EQ(c.grasp.flat_curvature, dc.grasp.flat_curvature);
   const ip::MetricsTolerances dt{};
   EXPECT_EQ(got.tolerances.drop_distance, dt.drop_distance);
   EXPECT_EQ(got.tolerances.settle_position_tolerance, dt.settle_position_tolerance);

@@ -143,7 +143,7 @@ void begin_grasp(const typename Types::Config& config, const Targets& targets,
     m.state = FingerState::approaching;
     m.touched = false;
     m.layer3.servo.reset();
-    m.settle.start();
+    m.settle = SettleWindow<typename Types::ScalarType, Types::kDim>{};
   }
 }
 
@@ -176,6 +176,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
       m.remember_contact(f.contact, t.object);
       const PressStep<Scalar, Types::kDim> press =
           press_step(st.press_params(g, i), m.target, f.contact.contact_point, f.contact.normal,
+                     gravity_unit<Scalar, Types::kDim>(t.config.force_layer.gravity_direction),
                      t.dt, m.settle);
       // Once placed, the finger presses still: sliding on under the full force would load
       // the object tangentially again (grasp.hpp).

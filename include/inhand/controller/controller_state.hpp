@@ -284,6 +284,7 @@ void balance_grasp(const typename Types::Config& config, const typename Types::I
   m.target.contact_point = sc.points.col(b) + d;
   m.target.normal = sc.normals.col(b);
   m.settle.start();
+  m.settle.gravity_side = false;  // aims at the normal measured there (grasp.hpp)
   st.grasp_balancing = b;
 }
 }  // namespace detail
