@@ -88,6 +88,9 @@ struct MujocoSetup {
   double torsional_friction = 0.0;
   /// Object mass, its inertia scaled with it (the same shape); 0 keeps the model's. [kg]
   double object_mass = 0.0;
+  /// Tell the controller which way the model's gravity pulls (opt.gravity, world frame) as
+  /// ForceLayerParams::gravity_direction, replacing the caller's; false leaves the caller's.
+  bool gravity_from_model = false;
 };
 
 class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSetup, mjModel> {
@@ -124,8 +127,9 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
     mj_forward(m, data_.get());
   }
 
-  /// The controller's configuration for this hand: the chains read from the model and,
-  /// unless the caller set them, the joint servo as the force layer should see it
+  /// The controller's configuration for this hand: the chains read from the model, the
+  /// model's gravity if `gravity_from_model`, and, unless the caller set them, the joint
+  /// servo as the force layer should see it
   /// (ForceLayerParams::servo_stiffness, servo_damping): damping kv, stiffness
   /// kv position_gain, with kv the largest of the fingers' actuators (the stiffer side for
   /// the gain cap).
@@ -138,6 +142,9 @@ class MujocoAdapter : public sim::PlantTypes<3, plant::HandController, MujocoSet
       base.force_layer.servo_damping = kv;
       base.force_layer.servo_stiffness = kv * setup_.position_gain;
     }
+    if (setup_.gravity_from_model)
+      base.force_layer.gravity_direction =
+          Eigen::Vector3d(model_->opt.gravity[0], model_->opt.gravity[1], model_->opt.gravity[2]);
     for (std::size_t i = 0; i < chains_.size(); ++i) base.fingers[i].chain = chains_[i];
     return base;
   }

@@ -291,6 +291,7 @@ inhand::sim::ScenarioSpec<md::MujocoAdapter> mujoco_spec(const ex::ScenarioFile&
   s.torsional_friction = p.torsional_friction;
   s.touch_threshold = p.touch_threshold;
   s.object_mass = p.object_mass;
+  s.gravity_from_model = p.gravity_from_model;
   s.name = sf.spec.name;
   s.controller = sf.spec.controller;
   s.stages = sf.spec.stages;

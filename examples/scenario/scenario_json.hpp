@@ -58,6 +58,9 @@ struct MujocoPlantFile {
   double torsional_friction = 0.0;  ///< m, on the object's geoms; 0: none (the model's)
   double touch_threshold = 0.02;    ///< N, touching above this normal force
   double object_mass = 0.0;         ///< kg ("object": {"mass"}); 0: the model's
+  /// The controller is told the model's gravity (its opt.gravity, world frame) as
+  /// ForceLayerParams::gravity_direction: ScenarioFile::gravity_from_plant.
+  bool gravity_from_model = false;
 };
 
 struct ScenarioFile {
@@ -72,6 +75,13 @@ struct ScenarioFile {
   std::string
       hand_preset;  ///< "shadow_like", "three_finger", "allegro_like", "shadow_like_coupled"
   std::string description;
+  /// controller.force_layer.gravity_direction left out or "plant" (the default): the
+  /// controller knows which way the plant's gravity pulls, as a hand on an arm knows it from
+  /// the arm's pose. The analytic plant's gravity is written into
+  /// spec.controller.force_layer.gravity_direction here; MuJoCo's comes from the model
+  /// (mujoco.gravity_from_model). A vector given there is taken as it is; [0, 0, 0]: the
+  /// controller is not told (docs/scenarios.md).
+  bool gravity_from_plant = true;
 };
 
 namespace scenario_detail {
@@ -192,7 +202,8 @@ inline double read_mujoco_object_mass(ObjectReader r) {
   return m;
 }
 
-inline plant::HandController::Config read_controller(ObjectReader r) {
+/// `gravity_from_plant`: set to whether force_layer.gravity_direction is left out or "plant".
+inline plant::HandController::Config read_controller(ObjectReader r, bool& gravity_from_plant) {
   plant::HandController::Config c{};
   c.control_period = r.number("control_period", c.control_period, Range::positive_up_to(0.1));
   c.max_tick = r.number("max_tick", c.max_tick, Range::positive_up_to(1.0));
@@ -276,9 +287,15 @@ inline plant::HandController::Config read_controller(ObjectReader r) {
     fl.servo_stiffness =
         f.number("servo_stiffness", fl.servo_stiffness, Range::non_negative_up_to(1e6));
     fl.servo_damping = f.number("servo_damping", fl.servo_damping, Range::non_negative_up_to(1e6));
-    const Eigen::Vector3d g = fl.gravity_direction;
-    fl.gravity_direction =
-        vec3(f.numbers("gravity_direction", {g.x(), g.y(), g.z()}, 3, Range::closed(-1e3, 1e3)));
+    const Json* gd = f.raw("gravity_direction");
+    gravity_from_plant = gd == nullptr || gd->is_string();
+    if (gravity_from_plant) {
+      f.choice("gravity_direction", "plant", {"plant"});
+    } else {
+      const Eigen::Vector3d g = fl.gravity_direction;
+      fl.gravity_direction =
+          vec3(f.numbers("gravity_direction", {g.x(), g.y(), g.z()}, 3, Range::closed(-1e3, 1e3)));
+    }
     f.finish();
   }
   {
@@ -519,7 +536,13 @@ inline ScenarioFile parse_scenario(const Json& j) {
     s.object = scenario_detail::read_object(r.object("object"), s.hand);
     s.plant = scenario_detail::read_plant(plant_reader);
   }
-  s.controller = scenario_detail::read_controller(r.object("controller"));
+  s.controller = scenario_detail::read_controller(r.object("controller"), out.gravity_from_plant);
+  if (out.gravity_from_plant) {
+    if (mujoco)
+      out.mujoco.gravity_from_model = true;
+    else
+      s.controller.force_layer.gravity_direction = s.plant.gravity;
+  }
   {
     ObjectReader t = r.object("tolerances");
     plant::MetricsTolerances& m = s.tolerances;

@@ -306,6 +306,45 @@ TEST(ScenarioJson, ForceLayerGravityDirectionIsAppliedAndChecked) {
   const std::string range_msg = parse_error(j);
   EXPECT_NE(range_msg.find("controller.force_layer.gravity_direction"), std::string::npos)
       << range_msg;
+  j["controller"]["force_layer"]["gravity_direction"] = "world";
+  const std::string word_msg = parse_error(j);
+  EXPECT_NE(word_msg.find("controller.force_layer.gravity_direction: must be one of plant"),
+            std::string::npos)
+      << word_msg;
+}
+
+// Left out or "plant", the controller is told the plant's gravity (the analytic plant's
+// here; MuJoCo's model's through the adapter); a vector, [0, 0, 0] included, is kept.
+TEST(ScenarioJson, GravityDirectionDefaultsToThePlants) {
+  Json j = base_scenario();
+  j["plant"] = {{"gravity", {3.0, 0.0, -4.0}}};
+  ex::ScenarioFile f = ex::parse_scenario(j);
+  EXPECT_TRUE(f.gravity_from_plant);
+  EXPECT_EQ(f.spec.controller.force_layer.gravity_direction, Eigen::Vector3d(3, 0, -4));
+  j["controller"] = {{"force_layer", {{"gravity_direction", "plant"}}}};
+  f = ex::parse_scenario(j);
+  EXPECT_TRUE(f.gravity_from_plant);
+  EXPECT_EQ(f.spec.controller.force_layer.gravity_direction, Eigen::Vector3d(3, 0, -4));
+  j["controller"]["force_layer"]["gravity_direction"] = {0.0, 0.0, 0.0};
+  f = ex::parse_scenario(j);
+  EXPECT_FALSE(f.gravity_from_plant);
+  EXPECT_EQ(f.spec.controller.force_layer.gravity_direction, Eigen::Vector3d::Zero());
+  j["controller"]["force_layer"]["gravity_direction"] = {0.0, 1.0, 0.0};
+  f = ex::parse_scenario(j);
+  EXPECT_FALSE(f.gravity_from_plant);
+  EXPECT_EQ(f.spec.controller.force_layer.gravity_direction, Eigen::Vector3d(0, 1, 0));
+
+  Json m = base_scenario();
+  m["hand"] = "three_finger";
+  m.erase("object");
+  m["plant"] = {{"engine", "mujoco"}};
+  f = ex::parse_scenario(m);
+  EXPECT_TRUE(f.mujoco.gravity_from_model);
+  EXPECT_EQ(f.spec.controller.force_layer.gravity_direction, Eigen::Vector3d::Zero());
+  m["controller"] = {{"force_layer", {{"gravity_direction", {0.0, 0.0, 0.0}}}}};
+  f = ex::parse_scenario(m);
+  EXPECT_FALSE(f.gravity_from_plant);
+  EXPECT_FALSE(f.mujoco.gravity_from_model);
 }
 
 TEST(ScenarioJson, SegmentsBecomeWorldFrameDisplacements) {
@@ -487,7 +526,8 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
         fb.servo_stiffness,  fb.servo_damping,   fb.release_load};
     for (std::size_t k = 0; k < 19; ++k)
       EXPECT_EQ(got_fl[k], want_fl[k]) << "force_layer field " << k;
-    EXPECT_EQ(fa.gravity_direction, fb.gravity_direction);
+    EXPECT_TRUE(f.gravity_from_plant);  // "plant": the plant's gravity, told
+    EXPECT_EQ(fa.gravity_direction, got.plant.gravity);
   }
   EXPECT_EQ(c.outlier_gates.max_object_speed, dc.outlier_gates.max_object_speed);
   EXPECT_EQ(c.outlier_gates.max_object_angular_speed, dc.outlier_gates.max_object_angular_speed);
