@@ -229,6 +229,10 @@ inline plant::HandController::Config read_controller(ObjectReader r, bool& gravi
                                           Range::positive_up_to(10.0));
     pf.orientation_integral_limit = f.number(
         "orientation_integral_limit", pf.orientation_integral_limit, Range::positive_up_to(100.0));
+    pf.position_integral_band =
+        f.limit("position_integral_band", pf.position_integral_band, Range::positive_up_to(10.0));
+    pf.orientation_integral_band = f.limit(
+        "orientation_integral_band", pf.orientation_integral_band, Range::positive_up_to(100.0));
     f.finish();
   }
   {

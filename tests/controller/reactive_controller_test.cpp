@@ -547,6 +547,12 @@ TEST(ReactiveControllerConfig, ValidateNamesTheOffendingField) {
       {"negative integral gain",
        [](PlanarCtrl::Config& c) { c.pose_feedback.position_integral_gain = -1.0; },
        "pose_feedback.position_integral_gain", -1, -1},
+      {"zero integral band",
+       [](PlanarCtrl::Config& c) { c.pose_feedback.position_integral_band = 0.0; },
+       "pose_feedback.position_integral_band", -1, -1},
+      {"NaN orientation integral band",
+       [](PlanarCtrl::Config& c) { c.pose_feedback.orientation_integral_band = kNaN; },
+       "pose_feedback.orientation_integral_band", -1, -1},
       {"negative position gain",
        [](PlanarCtrl::Config& c) { c.pose_feedback.position_gain = -1.0; },
        "pose_feedback.position_gain", -1, -1},
@@ -996,13 +1002,19 @@ TEST(ReactiveControllerManipulation, FollowsEq2KeepsContactAndBalancesTheThumb) 
     const ControllerStatus st = c.update(in, out);
     ASSERT_EQ(st, ControllerStatus::ok) << "tick " << k;
     // Layer 1: the commanded twist is feed-forward + PI feedback on the MEASURED pose,
-    // with the integral limited per part (reactive_controller.hpp, layer 1).
+    // the error integrated within its band and the integral limited per part
+    // (pose_feedback.hpp).
     const double dt = in.time - t_prev;
     const auto smp = task.evaluate(out.manipulation_time);
     EXPECT_EQ(out.segment, smp.segment);
     const inhand::Twist<double, 2> e = inhand::pose_error(smp.pose, in.object_pose);
     EXPECT_LT((out.pose_error - e).norm(), 1e-15);
-    integral += dt * e;
+    inhand::Twist<double, 2> banded = e;
+    if (e.head<2>().norm() > pf.position_integral_band)
+      banded.head<2>() *= pf.position_integral_band / e.head<2>().norm();
+    if (std::abs(e(2)) > pf.orientation_integral_band)
+      banded(2) *= pf.orientation_integral_band / std::abs(e(2));
+    integral += dt * banded;
     if (integral.head<2>().norm() > pf.position_integral_limit)
       integral.head<2>() *= pf.position_integral_limit / integral.head<2>().norm();
     if (std::abs(integral(2)) > pf.orientation_integral_limit)
@@ -1823,10 +1835,10 @@ TEST(ReactiveControllerHardening, TrajectoryMustStartAtTheMeasuredPose) {
   near.position += V2(0.005, 0.0);
   ASSERT_TRUE(c.start_manipulation(planar_task(near)).ok());
   // Held off by 5 mm (the object does not move), the pose integral reaches its bound
-  // and says so.
+  // and says so (growing at the integral band's 2 mm/s: 1 s).
   s.plant.object_moves = false;
   bool limited = false;
-  for (int k = 0; k < 1000; ++k) {
+  for (int k = 0; k < 2000; ++k) {
     tick(c, s.plant, in, out);
     limited = limited || has(out.warnings, ControllerWarning::pose_integral_limited);
     ASSERT_LE(out.pose_error_integral.head<2>().norm(),

@@ -462,6 +462,103 @@ TEST(ObjectTrajectory, SegmentsThatWouldOverflowAreRefused) {
 }
 
 // ---------------------------------------------------------------------------
+// The pose loop's integral band (PoseFeedback::position_integral_band,
+// orientation_integral_band; pose_feedback.hpp). (1) An error inside both bands is integrated
+// as by a loop without bands, bitwise; beyond a band, that part of the integral grows by dt b
+// along the error. (2) Closed loop on an object that follows the twist, x' = V + d (d a
+// constant rate the lower layers fail to realise, up to 2.5 K_p b, beyond the band): from
+// initial errors of 0.5-10 mm and 20-120 mrad the error returns to zero and K_i I to -d (the one
+// equilibrium), and with d = 0 (a release transient) the overshoot past zero along the initial
+// error is at most the unbanded loop's, which the band cuts to below half for errors of ten
+// bands or more.
+TEST(PoseLoop, IntegralBandBoundsTheTransientsShareAndKeepsTheEquilibrium) {
+  using Loop = inhand::PoseLoop<double, 3>;
+  using Tw = Loop::TwistT;
+  const double dt = 1e-3, inf = std::numeric_limits<double>::infinity();
+  inhand::PoseFeedback<double> pf;  // default gains K_p 8, K_i 10
+  pf.position_integral_band = 5e-4;
+  pf.orientation_integral_band = 0.01;
+  pf.position_integral_limit = pf.orientation_integral_limit = 1.0;  // out of play
+  pf.max_linear_speed = pf.max_angular_speed = 100.0;
+  inhand::PoseFeedback<double> open = pf;
+  open.position_integral_band = open.orientation_integral_band = inf;
+  const double bp = pf.position_integral_band, br = pf.orientation_integral_band;
+  const Tw zero = Tw::Zero();
+  Pose<double, 3> desired;
+  desired.position = V3(0.01, -0.02, 0.15);
+  auto measured_at = [&](const Tw& e) {  // pose_error(desired, measured) = e
+    Pose<double, 3> m = desired;
+    m.position -= e.head<3>();
+    m.rotation = inhand::rotation_exp<double>(V3(-e.tail<3>())) * desired.rotation;
+    return m;
+  };
+  auto rng = inhand_test::make_rng(2207);
+  for (int c = 0; c < scaled(20); ++c) {
+    const std::string at = "case " + std::to_string(c);
+    // (1) Inside the bands: the same integral; beyond them: dt b along the error.
+    Loop banded, unbanded;
+    const V3 up = inhand_test::random_unit_vector<double, 3>(rng);
+    const V3 ur = inhand_test::random_unit_vector<double, 3>(rng);
+    for (int t = 0; t < 20; ++t) {
+      Tw e;
+      e << 0.9 * bp * up * std::sin(0.3 * t), 0.9 * br * ur * std::cos(0.2 * t);
+      banded.update(pf, desired, zero, measured_at(e), dt);
+      unbanded.update(open, desired, zero, measured_at(e), dt);
+    }
+    EXPECT_TRUE(banded.integral() == unbanded.integral()) << at;
+    Tw big;
+    big << 7.0 * bp * up, 3.0 * br * ur;
+    const Tw before = banded.integral();
+    const auto step = banded.update(pf, desired, zero, measured_at(big), dt);
+    EXPECT_LT((step.pose_error - big).norm(), 1e-12) << at;
+    Tw grown;
+    grown << dt * bp * up, dt * br * ur;
+    EXPECT_LT((banded.integral() - before - grown).norm(), 1e-15) << at;
+
+    // (2) Closed loop.
+    const double e0p = inhand_test::uniform<double>(rng, 5e-4, 1e-2);
+    const double e0r = inhand_test::uniform<double>(rng, 0.02, 0.12);
+    Tw e0;
+    e0 << e0p * inhand_test::random_unit_vector<double, 3>(rng),
+        e0r * inhand_test::random_unit_vector<double, 3>(rng);
+    Tw d;
+    d << inhand_test::uniform<double>(rng, 0.0, 2.5) * pf.position_gain * bp *
+             inhand_test::random_unit_vector<double, 3>(rng),
+        inhand_test::uniform<double>(rng, 0.0, 2.5) * pf.orientation_gain * br *
+            inhand_test::random_unit_vector<double, 3>(rng);
+    auto run = [&](const inhand::PoseFeedback<double>& g, const Tw& rate, double& overshoot) {
+      Loop loop;
+      Pose<double, 3> m = measured_at(e0);
+      overshoot = 0.0;
+      Tw e = e0;
+      for (int t = 0; t < 15000; ++t) {
+        const auto s = loop.update(g, desired, zero, m, dt);
+        e = s.pose_error;
+        overshoot = std::max(overshoot, -e.head<3>().dot(e0.head<3>()) / e0p);
+        const Tw v = s.commanded_twist + rate;
+        m.position += dt * v.head<3>();
+        m.rotation = inhand::rotation_exp<double>(V3(dt * v.tail<3>())) * m.rotation;
+      }
+      return std::make_pair(e, Tw(loop.integral()));
+    };
+    double os_banded = 0.0, os_open = 0.0;
+    const auto held = run(pf, d, os_banded);
+    EXPECT_LT(held.first.head<3>().norm(), 1e-9) << at;
+    EXPECT_LT(held.first.tail<3>().norm(), 1e-7) << at;
+    Tw ki_i = held.second;
+    ki_i.head<3>() *= pf.position_integral_gain;
+    ki_i.tail<3>() *= pf.orientation_integral_gain;
+    EXPECT_LT((ki_i + d).norm(), 1e-6 * (1.0 + d.norm())) << at;
+    run(pf, zero, os_banded);
+    run(open, zero, os_open);
+    EXPECT_LE(os_banded, os_open + 1e-12) << at;
+    if (e0p >= 10.0 * bp) {
+      EXPECT_LT(os_banded, 0.5 * os_open) << at;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
 // The pose loop's conditional integration against a cut twist (PoseLoop::hold_integral_along,
 // used at the workspace's edge: workspace_limits.hpp), with equal and with unequal integral
 // gains K = diag(k_p, k_o). A constant pose error with a part along the cut's direction is
@@ -491,8 +588,10 @@ TEST(PoseLoop, HeldIntegralDoesNotWindUpAlongTheCutAndIntegratesAcrossIt) {
     inhand::PoseFeedback<double> pf;
     pf.position_integral_gain = gains.first;
     pf.orientation_integral_gain = gains.second;
-    pf.position_integral_limit = 1.0;  // the norm bounds kept out of play
+    pf.position_integral_limit = 1.0;  // the norm bounds and the bands kept out of play
     pf.orientation_integral_limit = 1.0;
+    pf.position_integral_band = std::numeric_limits<double>::infinity();
+    pf.orientation_integral_band = std::numeric_limits<double>::infinity();
     Tw k;
     k << Eigen::Vector3d::Constant(gains.first), Eigen::Vector3d::Constant(gains.second);
     for (int c = 0; c < scaled(100); ++c) {

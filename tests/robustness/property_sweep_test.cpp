@@ -93,6 +93,8 @@ void randomise_config(typename Ctrl::Config& c, Rng& rng, bool settle_zero) {
   pf.orientation_integral_gain = uniform<S>(rng, S(0), S(20));
   pf.position_integral_limit = log_uniform<S>(rng, S(1e-4), S(1e-2));
   pf.orientation_integral_limit = log_uniform<S>(rng, S(1e-3), S(1e-1));
+  pf.position_integral_band = pick_limit<S>(rng, S(1e-5), S(1e-2));
+  pf.orientation_integral_band = pick_limit<S>(rng, S(1e-4), S(1e-1));
   pf.max_linear_speed = log_uniform<S>(rng, S(1e-3), S(0.5));
   pf.max_angular_speed = log_uniform<S>(rng, S(0.05), S(5));
   c.servo.motion = {uniform<S>(rng, S(0.2), S(3)), uniform<S>(rng, S(0), S(10)),

@@ -170,7 +170,8 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
       "pose_feedback": {"position_gain": 6, "orientation_gain": 7, "max_linear_speed": 0.04,
                         "max_angular_speed": 0.9, "position_integral_gain": 9,
                         "orientation_integral_gain": 11, "position_integral_limit": 1e-3,
-                        "orientation_integral_limit": 0.01},
+                        "orientation_integral_limit": 0.01, "position_integral_band": 2e-4,
+                        "orientation_integral_band": null},
       "servo": {"motion": {"kp": 1.1, "ki": 0.5, "integral_limit": 0.2, "output_limit": null},
                 "force": {"kp": 0.03, "ki": 0.25, "integral_limit": 3, "output_limit": 0.1}},
       "ik": {"singular_threshold": 4e-3, "max_damping": 6e-3},
@@ -259,6 +260,8 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   EXPECT_EQ(c.pose_feedback.orientation_integral_gain, 11);
   EXPECT_EQ(c.pose_feedback.position_integral_limit, 1e-3);
   EXPECT_EQ(c.pose_feedback.orientation_integral_limit, 0.01);
+  EXPECT_EQ(c.pose_feedback.position_integral_band, 2e-4);
+  EXPECT_TRUE(std::isinf(c.pose_feedback.orientation_integral_band));
   EXPECT_EQ(c.servo.motion.kp, 1.1);
   EXPECT_EQ(c.servo.motion.ki, 0.5);
   EXPECT_EQ(c.servo.motion.integral_limit, 0.2);
@@ -542,6 +545,8 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
   EXPECT_EQ(c.pose_feedback.position_integral_limit, dc.pose_feedback.position_integral_limit);
   EXPECT_EQ(c.pose_feedback.orientation_integral_limit,
             dc.pose_feedback.orientation_integral_limit);
+  EXPECT_EQ(c.pose_feedback.position_integral_band, dc.pose_feedback.position_integral_band);
+  EXPECT_EQ(c.pose_feedback.orientation_integral_band, dc.pose_feedback.orientation_integral_band);
   EXPECT_EQ(c.pose_feedback.max_linear_speed, dc.pose_feedback.max_linear_speed);
   EXPECT_EQ(c.pose_feedback.max_angular_speed, dc.pose_feedback.max_angular_speed);
   for (const auto* pair : {&c.servo.motion, &c.servo.force}) {

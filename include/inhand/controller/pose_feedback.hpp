@@ -2,7 +2,7 @@
 // (docs/method.md section 3).
 //
 //   e = pose_error(X_d, X_measured)            (position m; rotation vector rad, world)
-//   I <- I + dt e, each part's norm bounded    (m s; rad s; anti-windup, direction kept)
+//   I <- I + dt sat_b(e), each part's norm bounded (m s; rad s; anti-windup, direction kept)
 //   V = V_ff + K_p e + K_i I                   (per part: position / orientation gains)
 //   V <- V * min(1, v_max / |v|, w_max / |w|)  (the whole twist scaled: screw axis kept)
 // Twists are (linear velocity of the object's reference point; angular velocity), world
@@ -10,6 +10,17 @@
 // to whatever steady twist the lower layers fail to realise; the integrator I owns the
 // rigid directions of the object's motion (the force layer's loops own only the
 // internal ones: docs/force_layer.md). noexcept, no allocation.
+//
+// The integral band. sat_b scales each part of e down to its band b (position m,
+// orientation rad; direction kept) before it is integrated, so a transient larger than the
+// band (the object settling into its contacts at release, a knock) adds at most b per
+// second to I instead of winding it up to unwind through the loop's slow pole. With the
+// object following the twist (x' = V + d, d what the lower layers do not realise, constant)
+// the error obeys e'' + K_p e' + K_i sat_b(e) = 0 per part: E = |e'|^2 / 2 + K_i Phi(e),
+// Phi the convex potential whose gradient is sat_b (|e|^2 / 2 inside the band, b |e| - b^2 / 2
+// beyond), gives E' = -K_p |e'|^2 <= 0, so every error returns to the one equilibrium e = 0,
+// K_i I = -d, for any b > 0 (docs/method.md section 3). Inside the band the loop is the
+// linear PI, s^2 + K_p s + K_i (poles -1.55 and -6.45 /s at the defaults).
 #pragma once
 
 #include <algorithm>
@@ -39,6 +50,12 @@ struct PoseFeedback {
   /// 0.2 rad/s, i.e. 40 % and 20 % of the default speed bounds.
   Scalar position_integral_limit = Scalar(2e-3);
   Scalar orientation_integral_limit = Scalar(2e-2);
+  /// The integral band (m and rad, > 0; +infinity: none): each part of the pose error is
+  /// integrated scaled down to this norm (file comment). 10 mrad is the shipped scenarios'
+  /// settle tolerance, below a release's roll; 2 mm lets a translation the workspace's edge
+  /// stops wind the integral as before (docs/force_layer.md, "The pose loop's integral band").
+  Scalar position_integral_band = Scalar(2e-3);
+  Scalar orientation_integral_band = Scalar(1e-2);
   Validation validate() const noexcept {
     if (!is_finite(position_integral_gain) || position_integral_gain < Scalar(0))
       return Validation::invalid("pose_feedback.position_integral_gain", "must be finite and >= 0");
@@ -50,6 +67,10 @@ struct PoseFeedback {
     if (!is_finite(orientation_integral_limit) || !(orientation_integral_limit > Scalar(0)))
       return Validation::invalid("pose_feedback.orientation_integral_limit",
                                  "must be finite and > 0");
+    if (!(position_integral_band > Scalar(0)))
+      return Validation::invalid("pose_feedback.position_integral_band", "must be > 0");
+    if (!(orientation_integral_band > Scalar(0)))
+      return Validation::invalid("pose_feedback.orientation_integral_band", "must be > 0");
     if (!is_finite(position_gain) || position_gain < Scalar(0))
       return Validation::invalid("pose_feedback.position_gain", "must be finite and >= 0");
     if (!is_finite(orientation_gain) || orientation_gain < Scalar(0))
@@ -88,8 +109,8 @@ class PoseLoop {
   /// orientation_integral_gain) per part; d is the unit direction of K `removed` (of
   /// `removed` itself when the two gains are equal, the defaults), so that d . I holds
   /// what K I adds along `removed`. The part along d gives back this tick's growth
-  /// dt (d . e) when that points the way the cut removed, never below zero:
-  /// I <- I - min(dt (d . e), d . I) d when both are > 0. The integral then does not wind
+  /// dt (d . sat_b(e)) when that points the way the cut removed, never below zero:
+  /// I <- I - min(dt (d . sat_b(e)), d . I) d when both are > 0. The integral then does not wind
   /// up against a constraint the twist cannot pass, and its norm never grows (what it takes
   /// out is at most its own part along d). Taken after update()'s norm bounds: on a tick
   /// that scaled a part to its bound, the part along d may end a little lower than before
@@ -105,7 +126,7 @@ class PoseLoop {
     const Scalar r = d.norm();
     if (!(r > Scalar(0)) || !is_finite(r)) return;
     d /= r;
-    const Scalar grown = dt * d.dot(pose_error), held = d.dot(integral_);
+    const Scalar grown = dt * d.dot(banded(pf, pose_error)), held = d.dot(integral_);
     if (grown > Scalar(0) && held > Scalar(0)) integral_ -= std::min(grown, held) * d;
   }
 
@@ -116,7 +137,7 @@ class PoseLoop {
     constexpr int R = SpatialDim<Dim>::kRot;
     PoseLoopStep<Scalar, Dim> out;
     out.pose_error = pose_error(desired, measured);
-    integral_ += dt * out.pose_error;
+    integral_ += dt * banded(pf, out.pose_error);
     const Scalar ip = integral_.template head<Dim>().norm();
     if (ip > pf.position_integral_limit) {
       integral_.template head<Dim>() *= pf.position_integral_limit / ip;
@@ -145,6 +166,17 @@ class PoseLoop {
   }
 
  private:
+  /// sat_b(e): each part of e scaled down to its band, direction kept (file comment).
+  static TwistT banded(const PoseFeedback<Scalar>& pf, const TwistT& e) noexcept {
+    constexpr int R = SpatialDim<Dim>::kRot;
+    TwistT b = e;
+    const Scalar ep = e.template head<Dim>().norm(), er = e.template tail<R>().norm();
+    if (ep > pf.position_integral_band) b.template head<Dim>() *= pf.position_integral_band / ep;
+    if (er > pf.orientation_integral_band)
+      b.template tail<R>() *= pf.orientation_integral_band / er;
+    return b;
+  }
+
   TwistT integral_ = TwistT::Zero();
 };
 
