@@ -18,6 +18,13 @@
 //   max_contact_losses         contact losses of the stage (counted after the grasp)
 //   must_not_drop, must_drop   the object (did not) exceed the drop distance
 //   must_complete              the stage completed (a grasp reached `grasped`)
+//   min_warning_lead [s]       where the stage lost a contact (a finger the controller
+//                              reports reacquiring: contact_lost), ControllerWarning::
+//                              beyond_capacity was raised at least this long before the
+//                              first such tick; where it dropped the object without one, it
+//                              was raised in the stage. A stage that lost nothing passes.
+//                              Needs the controller's warning times (StageWarningTimes):
+//                              a runner that does not record them reports a violation.
 // A stage named in "expect" that did not run (the run stopped early) is a violation.
 #pragma once
 
@@ -38,9 +45,16 @@ struct StageExpectation {
   std::optional<double> max_rms_position_error, max_final_position_error, max_peak_position_error;
   std::optional<double> max_rms_orientation_error, max_final_orientation_error,
       max_peak_orientation_error;
-  std::optional<double> max_settle_time, max_relative_force_error, max_slip;
+  std::optional<double> max_settle_time, max_relative_force_error, max_slip, min_warning_lead;
   std::optional<long long> max_contact_losses;
   std::optional<bool> must_not_drop, must_drop, must_complete;
+};
+
+/// When the controller first raised ControllerWarning::beyond_capacity and first reported
+/// a lost contact in one stage: s into the stage, -1 for never (force_layer_summary.hpp).
+struct StageWarningTimes {
+  std::string stage;
+  double first_beyond_capacity = -1.0, first_contact_lost = -1.0;
 };
 
 struct Expectations {
@@ -82,6 +96,7 @@ inline Expectations parse_expectations(const Json& j, const std::string& path,
     s.max_relative_force_error =
         r.optional_number("max_relative_force_error", Range::non_negative_up_to(1e3));
     s.max_slip = r.optional_number("max_slip", len);
+    s.min_warning_lead = r.optional_number("min_warning_lead", Range::non_negative_up_to(3600.0));
     if (r.has("max_contact_losses"))
       s.max_contact_losses = r.integer("max_contact_losses", 0, 0, 1000000);
     else
@@ -139,15 +154,51 @@ inline void check_stage(std::vector<std::string>& out, const StageExpectation& e
   if (e.must_complete.value_or(false) && !m.completed)
     out.push_back("stage '" + n + "': did not complete");
 }
+/// min_warning_lead (file comment) of stage `m` against its warning times `w` (nullptr:
+/// not recorded).
+inline void check_warning_lead(std::vector<std::string>& out, const StageExpectation& e,
+                               const plant::StageMetrics& m, const StageWarningTimes* w) {
+  if (!e.min_warning_lead) return;
+  const std::string where = "stage '" + m.name + "': ";
+  if (w == nullptr) {
+    out.push_back(where + "min_warning_lead: the controller's warning times were not recorded");
+    return;
+  }
+  const double warned = w->first_beyond_capacity, lost = w->first_contact_lost;
+  if (lost >= 0.0) {
+    if (warned < 0.0 || warned > lost)
+      out.push_back(where + "a contact was lost at " + fmt(lost) +
+                    " s with no beyond_capacity warning before it");
+    else if (!(lost - warned >= *e.min_warning_lead))
+      out.push_back(where + "beyond_capacity raised " + fmt(lost - warned) +
+                    " s before the first contact lost, less than " + fmt(*e.min_warning_lead) +
+                    " s");
+  } else if (m.dropped && warned < 0.0) {
+    out.push_back(where + "the object was dropped with no beyond_capacity warning");
+  }
+}
 }  // namespace detail
 
 /// Human-readable violations of `e` by the metrics of a run; empty when all hold.
-inline std::vector<std::string> check_expectations(const Expectations& e,
-                                                   const std::vector<plant::StageMetrics>& stages) {
+/// `warnings`: the controller's warning times by stage name, for min_warning_lead
+/// (nullptr: not recorded, and a stage that asks for a lead is a violation).
+inline std::vector<std::string> check_expectations(
+    const Expectations& e, const std::vector<plant::StageMetrics>& stages,
+    const std::vector<StageWarningTimes>* warnings = nullptr) {
   std::vector<std::string> out;
+  const auto check = [&](const StageExpectation& s, const plant::StageMetrics& m) {
+    detail::check_stage(out, s, m);
+    const StageWarningTimes* w = nullptr;
+    if (warnings != nullptr) {
+      const auto it = std::find_if(warnings->begin(), warnings->end(),
+                                   [&](const StageWarningTimes& t) { return t.stage == m.name; });
+      if (it != warnings->end()) w = &*it;
+    }
+    detail::check_warning_lead(out, s, m, w);
+  };
   for (const StageExpectation& s : e.stages) {
     if (s.stage == all_stages_key()) {
-      for (const auto& m : stages) detail::check_stage(out, s, m);
+      for (const auto& m : stages) check(s, m);
       continue;
     }
     const auto it = std::find_if(stages.begin(), stages.end(),
@@ -156,7 +207,7 @@ inline std::vector<std::string> check_expectations(const Expectations& e,
       out.push_back("stage '" + s.stage + "': did not run");
       continue;
     }
-    detail::check_stage(out, s, *it);
+    check(s, *it);
   }
   return out;
 }

@@ -1,6 +1,7 @@
 // Per-stage summary of the force layer and the pose loop's integrator, for run
 // summaries (summary.json "force_layer"): how far the grip rose, how long contacts
-// slipped, whether the load was beyond the hand, and how the integrators moved.
+// slipped, whether the load was beyond the hand (and how long before the first contact
+// the controller lost: `min_warning_lead`, expectations.hpp), and how the integrators moved.
 //
 // Drift of an integrator: the change of its state per second over the part of the
 // stage after its first `settle_time` seconds (10 s by default), |x(end) - x(t0 + 10)| /
@@ -28,6 +29,9 @@ struct ForceLayerStageSummary {
   long slip_ticks = 0;  ///< ticks with any finger slipping
   long beyond_capacity_ticks = 0;
   double first_beyond_capacity = -1.0;  ///< s into the stage, -1: never
+  /// s into the stage of the first tick a finger was FingerState::reacquiring (the
+  /// controller lost its contact: ControllerStatus::contact_lost), -1: never
+  double first_contact_lost = -1.0;
   double max_abs_force_integral = 0.0;  ///< N s, over fingers and ticks
   Twist<double, Dim> final_load = Twist<double, Dim>::Zero();
   Twist<double, Dim> final_pose_integral = Twist<double, Dim>::Zero();
@@ -59,6 +63,9 @@ class ForceLayerSummaryAccumulator {
       if (s.beyond_capacity_ticks == 0) s.first_beyond_capacity = stage_time;
       ++s.beyond_capacity_ticks;
     }
+    for (const auto& f : out.fingers)
+      if (f.state == FingerState::reacquiring && s.first_contact_lost < 0.0)
+        s.first_contact_lost = stage_time;
     integrals_.resize(out.fingers.size());
     for (std::size_t i = 0; i < out.fingers.size(); ++i) {
       integrals_[i] = out.fingers[i].force_integral;

@@ -702,6 +702,9 @@ TEST(ScenarioJson, RejectsBadValuesNamingTheKey) {
       {"negative expectation",
        [](Json& j) { j["expect"]["hold"]["max_settle_time"] = -1; },
        {"expect.hold.max_settle_time"}},
+      {"negative warning lead",
+       [](Json& j) { j["expect"]["hold"]["min_warning_lead"] = -0.01; },
+       {"expect.hold.min_warning_lead"}},
       {"time step too large for the stiffness",
        [](Json& j) {
          j["plant"]["time_step"] = 1e-3;
@@ -1133,6 +1136,42 @@ TEST(Expectations, MustDropAndStagesThatDidNotRun) {
   ms[1].dropped = true;
   v = ex::check_expectations(e, ms);
   ASSERT_EQ(v.size(), 1u);
+}
+
+TEST(Expectations, MinWarningLeadAsksForTheWarningBeforeTheFirstContactLost) {
+  const ex::Expectations e = ex::parse_expectations(
+      ex::parse_json_text(R"({"hold": {"min_warning_lead": 0.05}})"), "expect");
+  std::vector<ip::StageMetrics> ms = {stage("grasp", ip::StageKind::grasp),
+                                      stage("hold", ip::StageKind::hold)};
+  std::vector<ex::StageWarningTimes> w = {{"grasp", -1.0, -1.0}, {"hold", 0.03, 0.10}};
+  const auto violations = [&](const std::vector<ex::StageWarningTimes>* times) {
+    return ex::check_expectations(e, ms, times);
+  };
+  EXPECT_TRUE(violations(&w).empty());  // warned 70 ms before the first loss
+  w[1].first_beyond_capacity = 0.05;    // 50 ms: the bound is inclusive
+  EXPECT_TRUE(violations(&w).empty());
+  w[1].first_beyond_capacity = 0.07;
+  std::vector<std::string> v = violations(&w);
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_NE(v[0].find("'hold': beyond_capacity raised 0.03 s before"), std::string::npos) << v[0];
+  for (const double late : {-1.0, 0.12}) {  // never, or only after the loss
+    w[1].first_beyond_capacity = late;
+    v = violations(&w);
+    ASSERT_EQ(v.size(), 1u);
+    EXPECT_NE(v[0].find("no beyond_capacity warning before it"), std::string::npos) << v[0];
+  }
+  w[1] = {"hold", -1.0, -1.0};  // nothing lost, nothing dropped: no warning needed
+  EXPECT_TRUE(violations(&w).empty());
+  ms[1].dropped = true;  // dropped without a contact reported lost: warned at all
+  v = violations(&w);
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_NE(v[0].find("dropped with no beyond_capacity warning"), std::string::npos) << v[0];
+  w[1].first_beyond_capacity = 0.5;
+  EXPECT_TRUE(violations(&w).empty());
+  // A runner that does not record the warning times cannot check the bound.
+  v = violations(nullptr);
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_NE(v[0].find("were not recorded"), std::string::npos) << v[0];
 }
 
 // ---------------------------------------------------------------------------
