@@ -311,17 +311,31 @@ struct PlantGeometry {
 };
 
 #ifdef INHAND_SCENARIO_WITH_MUJOCO
-/// The shape of the model's object: its body's first geom (cylinder, box or sphere).
+/// The shape the pictures draw for the model's object, from its body's first geom: a
+/// cylinder, box or sphere as it is; a capsule as the cylinder that bounds it, an ellipsoid
+/// as its bounding box, any other geom (a mesh, say) as its bounding sphere. The controller
+/// never sees it: the object is unknown to it whatever its shape.
 ip::ObjectShape mujoco_object_shape(const mjModel* m, const std::string& body) {
   const int b = mj_name2id(m, mjOBJ_BODY, body.c_str());
   for (int g = 0; b >= 0 && g < m->ngeom; ++g) {
     if (m->geom_bodyid[g] != b) continue;
     const mjtNum* size = m->geom_size + 3 * g;
-    if (m->geom_type[g] == mjGEOM_CYLINDER) return ip::ObjectShape::cylinder(size[0], size[1]);
-    if (m->geom_type[g] == mjGEOM_BOX) return ip::ObjectShape::box(size[0], size[1], size[2]);
-    if (m->geom_type[g] == mjGEOM_SPHERE) return ip::ObjectShape::sphere(size[0]);
+    switch (m->geom_type[g]) {
+      case mjGEOM_CYLINDER:
+        return ip::ObjectShape::cylinder(size[0], size[1]);
+      case mjGEOM_BOX:
+        return ip::ObjectShape::box(size[0], size[1], size[2]);
+      case mjGEOM_SPHERE:
+        return ip::ObjectShape::sphere(size[0]);
+      case mjGEOM_CAPSULE:
+        return ip::ObjectShape::cylinder(size[0], size[1] + size[0]);
+      case mjGEOM_ELLIPSOID:
+        return ip::ObjectShape::box(size[0], size[1], size[2]);
+      default:
+        return ip::ObjectShape::sphere(m->geom_rbound[g]);
+    }
   }
-  throw ex::JsonError("plant.model", "body " + body + " has no cylinder, box or sphere geom");
+  throw ex::JsonError("plant.model", "body " + body + " has no geom");
 }
 #endif
 

@@ -1,8 +1,9 @@
 // The finger chains read from the compiled MJCF hands (examples/mujoco/mujoco_chains.hpp)
 // against MuJoCo's own kinematics, and against the presets the models were written from
 // (include/inhand/sim/presets.hpp): the three-finger and the Shadow-like hands, each with
-// either paper object (models/<hand>_cylinder.xml, models/<hand>_box.xml). Units: metres,
-// radians.
+// either paper object (models/<hand>_cylinder.xml, models/<hand>_box.xml) or an object the
+// preset was not made for (models/three_finger_capsule.xml, models/shadow_like_ellipsoid.xml).
+// Units: metres, radians.
 #include "mujoco_chains.hpp"
 
 #include <gtest/gtest.h>
@@ -36,6 +37,8 @@ const HandModel kHandModels[] = {
     {"three_finger_box", "three_finger_box.xml", &inhand::plant::three_finger_hand},
     {"shadow_like", "shadow_like_cylinder.xml", &inhand::plant::shadow_like_hand},
     {"shadow_like_box", "shadow_like_box.xml", &inhand::plant::shadow_like_hand},
+    {"three_finger_capsule", "three_finger_capsule.xml", &inhand::plant::three_finger_hand},
+    {"shadow_like_ellipsoid", "shadow_like_ellipsoid.xml", &inhand::plant::shadow_like_hand},
 };
 
 /// The preset's fingers in its order, as the models name them: {"palm", "<finger>_tip"}.
