@@ -408,6 +408,22 @@ Placed press_until_placed(const GraspParams<double>& g, const Eigen::Vector3d& s
   return r;
 }
 
+// A finger that misses (grasp.hpp): the virtual contact point has crossed the plane
+// through the object's centre normal to the target's normal, whatever its tangential offset.
+TEST(PassedObjectCentre, IsTheSideOfTheCentrePlane) {
+  const Eigen::Vector3d c(0.01, -0.02, 0.005), n = Eigen::Vector3d(1, 2, -2) / 3.0;
+  const Eigen::Vector3d t = Eigen::Vector3d(2, -1, 0).normalized();  // tangential, t . n = 0
+  for (const double side : {0.03, 1e-9, -1e-9, -0.03}) {
+    for (const double offset : {0.0, 0.05}) {
+      const Eigen::Vector3d p = c + side * n + offset * t;
+      EXPECT_EQ((inhand::passed_object_centre<double, 3>(p, c, n)), side < 0.0) << side;
+    }
+  }
+  const Eigen::Vector2d c2(0.0, 0.01), n2(0.0, 1.0);
+  EXPECT_FALSE((inhand::passed_object_centre<double, 2>(Eigen::Vector2d(0.04, 0.011), c2, n2)));
+  EXPECT_TRUE((inhand::passed_object_centre<double, 2>(Eigen::Vector2d(0.04, 0.009), c2, n2)));
+}
+
 // On a cylinder (radius 20 mm, axis x) a finger that touches 0.4 rad below or above the
 // equator ends 0.05-0.1 rad on gravity's side (gravity -z: below) with the defaults (within
 // alignment_tolerance / 2 of the aim, from either side), and at

@@ -1,7 +1,8 @@
 // Closed-loop properties of the force layer on the analytic plant (docs/force_layer.md):
 // one equilibrium (no integrator ramps over a long hold), and the grip following a
 // load added mid-task; and the plant's actuator delay and force-sensor errors that
-// the force-layer scenarios use.
+// the force-layer scenarios use. Also the grasp leaving out a finger that misses a small
+// object (controller/grasp.hpp, "A finger that misses").
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 
 #include "campaign/campaign_cases.hpp"
 #include "common/test_support.hpp"
+#include "inhand/sim/presets_allegro.hpp"
 #include "inhand/sim/scenario.hpp"
 
 namespace {
@@ -23,6 +25,48 @@ using inhand::ControllerWarning;
 struct IntegratorTrace {
   std::vector<double> time, force, pose;
 };
+
+// The Allegro-like hand spreads its index and ring fingers about 30 mm either side of the
+// middle; a 15 mm sphere lies beside their lines of approach. They are left out once their
+// fingertips' centres pass the sphere's centre (creeping at 5 mm/s past their targets, about
+// 3.7 s into the grasp; the stage allows 6 s), and the grasp completes with the middle
+// finger and the thumb, the other two standing still; on a 20 mm sphere every finger
+// touches and none is left out. Before, the grasp never completed on the 15 mm sphere.
+TEST(GraspMiss, FingersBesideASmallObjectAreLeftOutAndTheGraspCompletes) {
+  for (const double radius : {0.015, 0.02}) {
+    SCOPED_TRACE(radius);
+    ip::ScenarioSpec spec =
+        ip::paper_scenario(ip::PaperObject::cylinder, ip::PaperTask::translate, 0);
+    spec.hand = ip::allegro_like_hand();
+    spec.object = ip::paper_cylinder(spec.hand);
+    spec.object.shape = ip::ObjectShape::sphere(radius);
+    spec.stages.resize(1);
+    spec.stages[0].duration = 6.0;
+    bool warned = false;
+    std::vector<inhand::FingerState> states;
+    double still = 0.0;  // largest |joint velocity| of a missed finger at the grasp's end
+    const ip::ScenarioResult r = ip::ScenarioRunner().run(spec, [&](const ip::TickRecord& rec) {
+      warned = warned || has(rec.output->warnings, ControllerWarning::grasp_finger_missed);
+      if (rec.status != inhand::ControllerStatus::grasped) return;
+      states.clear();
+      for (const auto& fo : rec.output->fingers) {
+        states.push_back(fo.state);
+        if (fo.state == inhand::FingerState::missed)
+          still = std::max(still, fo.joint_velocities.cwiseAbs().maxCoeff());
+      }
+    });
+    ASSERT_EQ(r.stages.size(), 1u);
+    EXPECT_TRUE(r.stages[0].completed);
+    ASSERT_EQ(states.size(), 4u);  // index, middle, ring, thumb
+    const bool small = radius < 0.018;
+    EXPECT_EQ(warned, small);
+    EXPECT_EQ(states[0] == inhand::FingerState::missed, small);
+    EXPECT_EQ(states[2] == inhand::FingerState::missed, small);
+    EXPECT_NE(states[1], inhand::FingerState::missed);
+    EXPECT_NE(states[3], inhand::FingerState::missed);
+    EXPECT_LT(still, 1e-9);
+  }
+}
 
 TEST(HoldOn, NoIntegratorRampsOverALongHoldUnderGravity) {
   ip::ScenarioSpec spec =

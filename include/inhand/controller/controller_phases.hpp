@@ -7,114 +7,12 @@
 
 #include <cstddef>
 
-#include "inhand/controller/controller_state.hpp"
-#include "inhand/controller/finger_motion.hpp"
+#include "inhand/controller/tick_steps.hpp"
 #include "inhand/controller/trajectory.hpp"
 #include "inhand/controller/workspace_limits.hpp"
 #include "inhand/kinematics/contact_kinematics.hpp"
 
 namespace inhand {
-
-/// This tick's values, shared by its steps.
-template <typename Types>
-struct TickInput {
-  const typename Types::Config& config;
-  const typename Types::Input& in;
-  const typename Types::PoseT& object;  ///< the gated measured object pose
-  typename Types::ScalarType dt;        ///< s
-};
-
-namespace detail {
-
-/// Layer 2's force layer: the touching fingers' contacts (unit normals), gated forces
-/// and fingertip steps since the last tick; `object_free` false while grasping.
-template <typename Types>
-void run_force_layer(const TickInput<Types>& t, bool object_free, ControllerState<Types>& st,
-                     TickScratch<Types>& sc) noexcept {
-  using Scalar = typename Types::ScalarType;
-  for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {
-    const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
-    FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
-    sc.touching(i) = f.contact.touching ? 1 : 0;
-    sc.tip_steps.col(i).setZero();
-    sc.servo_gain(i) = Scalar(0);
-    if (f.contact.touching) {
-      sc.normals.col(i) = f.contact.normal.normalized();
-      sc.servo_gain(i) = servo_normal_gain<Scalar>(m.jacobian, sc.normals.col(i));
-      sc.points.col(i) = f.contact.contact_point;
-      sc.measured(i) = m.force_gate.force();
-      // Fingertip displacement since the last tick, through the last tick's Jacobian.
-      if (m.has_q_prev) {
-        m.q_prev = f.joint_positions - m.q_prev;  // the joint step (no temporary)
-        sc.tip_steps.col(i) = columns_times(m.jacobian, m.q_prev);
-      }
-    }
-    m.q_prev = f.joint_positions;
-    m.has_q_prev = true;
-  }
-  typename ForceLayer<Scalar, Types::kDim, Types::kNumFingers>::Step step;
-  step.touching = &sc.touching;
-  step.points = &sc.points;
-  step.normals = &sc.normals;
-  step.measured = &sc.measured;
-  step.pattern = &sc.pattern;
-  step.tip_steps = &sc.tip_steps;
-  step.servo_gain = &sc.servo_gain;
-  step.object_position = t.object.position;
-  step.object_rotation = t.object.rotation;
-  step.min_force = t.config.force_planner.min_force;
-  step.max_force = t.config.force_planner.max_force;
-  step.object_free = object_free;
-  step.release_grip = st.grasp_grip;
-  step.dt = t.dt;
-  st.forces.update(step, sc.forces);
-}
-
-/// Layers 2-3 for finger i at the point p of `points`: contact velocity v, the force
-/// layer's velocity when `force_active` (the finger touches), servo, IK, continuity.
-template <typename Types>
-ControllerWarning command_finger(const TickInput<Types>& t, int i,
-                                 const FingerPoints<Types>& points, const typename Types::Vec& p,
-                                 const typename Types::Vec& v, bool force_active,
-                                 ControllerState<Types>& st, TickScratch<Types>& sc,
-                                 typename Types::FingerOutput& fo) noexcept {
-  using Scalar = typename Types::ScalarType;
-  FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
-  const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
-  points.jacobian(p, m.jacobian);
-  fo.desired_contact_velocity = v;
-  fo.desired_normal_force = force_active ? sc.forces.grip * sc.pattern(i) : Scalar(0);
-  fo.force_target = force_active ? sc.forces.target(i) : Scalar(0);
-  using Vec = typename Types::Vec;
-  Vec force = Vec::Zero();
-  if (force_active)  // stores a force along n through servo and contact (joint_servo.hpp)
-    force = -sc.forces.velocity(i) *
-            servo_press_direction<Scalar, Types::kDim>(m.jacobian, sc.normals.col(i),
-                                                       st.forces.press_stiffness()(i),
-                                                       t.config.force_layer.servo_stiffness);
-  const ControllerWarning w = sc.fingers[static_cast<std::size_t>(i)].layer3.command(
-      m.layer3, m.jacobian, f.joint_positions, v, f.contact.normal, force_active ? &force : nullptr,
-      t.config.max_joint_acceleration, t.dt, fo, m.state == FingerState::pressing);
-  fo.stiffness_estimate = st.forces.stiffness_estimate()(i);
-  fo.force_integral = st.forces.integral()(i);
-  fo.slipping = sc.forces.slipping(i) != 0;
-  fo.state = m.state;
-  return w;
-}
-
-/// Finger i's kinematics this tick; its contact's plausibility flagged in fo and w.
-template <typename Types>
-FingerPoints<Types> finger_points(const TickInput<Types>& t, int i, TickScratch<Types>& sc,
-                                  typename Types::FingerOutput& fo, ControllerWarning& w) noexcept {
-  const auto k = static_cast<std::size_t>(i);
-  const FingerPoints<Types> points(t.config.fingers[k], sc.fingers[k].plan, t.in.fingers[k],
-                                   sc.fingers[k].kinematics);
-  fo.implausible_contact = points.implausible_contact(t.config.contact_tolerance);
-  if (fo.implausible_contact) w |= ControllerWarning::implausible_contact;
-  return points;
-}
-
-}  // namespace detail
 
 /// Start of the grasp towards `targets` (validated): each finger's target, its pattern q_g
 /// (the planner's over the targets' normals, all touching, grasp.hpp; planned once, which
@@ -163,12 +61,28 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
     sc.pattern(i) = m.settle.placed ? m.grasp_force : g.slide_force_fraction * m.grasp_pattern;
   }
   detail::run_force_layer(t, false, st, sc);
-  bool all_placed = true;
+  using Vec = typename Types::Vec;
+  bool all_placed = true, missed = false, newly_missed = false, balancing_placed = false;
+  int placed = 0;
   for (int i = 0; i < static_cast<int>(st.fingers.size()); ++i) {
     FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     const typename Types::FingerInput& f = t.in.fingers[static_cast<std::size_t>(i)];
     typename Types::FingerOutput& fo = out.fingers[static_cast<std::size_t>(i)];
     const FingerPoints<Types> points = detail::finger_points(t, i, sc, fo, w);
+    // A finger that misses (grasp.hpp): left out, commanded to stand still.
+    if (m.state != FingerState::missed && !f.contact.touching && !m.touched &&
+        passed_object_centre<Scalar, Types::kDim>(points.miss_point(), t.object.position,
+                                                  m.target.normal)) {
+      m.state = FingerState::missed;
+      m.layer3.servo.reset();
+      newly_missed = true;
+    }
+    if (m.state == FingerState::missed) {
+      missed = true;
+      w |= detail::command_finger(t, i, points, points.centre(), Vec(Vec::Zero()), false, st, sc,
+                                  fo);
+      continue;
+    }
     if (f.contact.touching) {
       if (m.state == FingerState::approaching) m.layer3.servo.reset_force();
       m.state = FingerState::pressing;
@@ -187,6 +101,10 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
       // longer moves along the object, so its contact no longer changes (sensor noise
       // alone would otherwise un-place it).
       m.settle.placed = m.settle.placed || press.placed;
+      placed += m.settle.placed ? 1 : 0;
+      balancing_placed = balancing_placed ||
+                         (m.settle.placed && t.config.fingers[static_cast<std::size_t>(i)].role ==
+                                                 FingerRole::balancing);
       all_placed =
           all_placed && m.settle.placed &&
           std::abs(m.force_gate.force() - m.grasp_force) <= g.force_tolerance * m.grasp_force;
@@ -194,15 +112,19 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
       if (m.state == FingerState::pressing) m.layer3.servo.reset_force();
       m.settle.start();
       m.state = FingerState::approaching;
-      const typename Types::Vec p_v = points.virtual_point(m.target.normal);
+      const Vec p_v = points.virtual_point(m.target.normal);
       // A finger that has touched comes back at creep speed (grasp.hpp surface_point).
-      const typename Types::Vec v = approach_velocity(
+      const Vec v = approach_velocity(
           g, p_v, m.touched ? surface_point(p_v, m.target) : m.target.contact_point,
           m.target.normal);
       w |= detail::command_finger(t, i, points, p_v, v, false, st, sc, fo);
       all_placed = false;
     }
   }
+  if (newly_missed) detail::leave_out_missed(t.config, st, sc);
+  if (missed) w |= ControllerWarning::grasp_finger_missed;
+  // Without a finger left out, every finger placed; with one, at least two, one balancing.
+  all_placed = all_placed && (!missed || (placed >= 2 && balancing_placed));
   out.warnings = w;
   out.desired_object_pose = t.object;
   out.commanded_twist.setZero();
@@ -278,6 +200,10 @@ ControllerStatus manipulation_phase(
       const Vec v = contact_point_velocity<Scalar, Types::kDim>(twist, f.contact.contact_point,
                                                                 t.object.position);
       w |= detail::command_finger(t, i, points, f.contact.contact_point, v, true, st, sc, fo);
+    } else if (m.state == FingerState::missed) {  // left out until it touches (grasp.hpp)
+      w |= ControllerWarning::grasp_finger_missed;
+      w |= detail::command_finger(t, i, points, points.centre(), Vec(Vec::Zero()), false, st, sc,
+                                  fo);
     } else {
       lost = true;
       if (m.state != FingerState::reacquiring) m.layer3.servo.reset_force();

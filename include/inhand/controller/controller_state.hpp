@@ -225,9 +225,11 @@ ControllerWarning size_grip_on_measured_normals(const typename Types::Config& co
   for (int i = 0; i < n && !st.grasp_grip_measured; ++i) {
     const FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
     const typename Types::FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
-    if (!f.contact.touching || !m.settle.placed)
+    const bool out = m.state == FingerState::missed;  // left out: pattern 0 (grasp.hpp)
+    if (!out && (!f.contact.touching || !m.settle.placed))
       return st.grasp_grip_capped ? ControllerWarning::release_grip_capped : none;
-    sc.normals.col(i) = f.contact.normal.normalized();
+    sc.normals.col(i) =
+        out ? typename Types::Vec(Types::Vec::Zero()) : f.contact.normal.normalized();
     sc.pattern(i) = m.grasp_pattern;
   }
   if (!st.grasp_grip_measured) {
@@ -266,13 +268,15 @@ void balance_grasp(const typename Types::Config& config, const typename Types::I
   for (int i = 0; i < n && !st.grasp_balanced; ++i) {
     const typename Types::FingerInput& f = in.fingers[static_cast<std::size_t>(i)];
     const FingerMemory<Types>& m = st.fingers[static_cast<std::size_t>(i)];
-    if (config.fingers[static_cast<std::size_t>(i)].role == FingerRole::balancing) {
+    const bool out = m.state == FingerState::missed;  // left out: pattern 0 (grasp.hpp)
+    if (!out && config.fingers[static_cast<std::size_t>(i)].role == FingerRole::balancing) {
       st.grasp_balanced = b >= 0;  // a second balancing finger: no shift for this grasp
       b = i;
     }
-    if (!f.contact.touching || !m.settle.placed) return;
-    sc.points.col(i) = f.contact.contact_point;
-    sc.normals.col(i) = f.contact.normal.normalized();
+    if (!out && (!f.contact.touching || !m.settle.placed)) return;
+    sc.points.col(i) = out ? typename Types::Vec(Types::Vec::Zero()) : f.contact.contact_point;
+    sc.normals.col(i) =
+        out ? typename Types::Vec(Types::Vec::Zero()) : f.contact.normal.normalized();
     sc.pattern(i) = m.grasp_pattern;
   }
   if (st.grasp_balanced || b < 0) return;

@@ -7,6 +7,36 @@
 
 namespace inhand {
 
+/// What a finger is doing this tick.
+enum class FingerState : unsigned char {
+  idle,         ///< no task: zero joint velocity
+  approaching,  ///< grasp phase, moving towards its desired contact point
+  pressing,     ///< grasp phase, touching, servoing to its grasp force
+  in_contact,   ///< manipulation, touching: hybrid servo on eq. 2 + planned force
+  reacquiring,  ///< manipulation, contact lost: re-approaching along the last normal
+  /// grasp phase: approached past the plane through the measured object's centre normal to
+  /// its target's normal without touching (grasp.hpp, "A finger that misses"): left out of
+  /// the grasp and, until it touches the object, of the task; no command
+  missed,
+};
+inline const char* to_string(FingerState s) noexcept {
+  switch (s) {
+    case FingerState::idle:
+      return "idle";
+    case FingerState::approaching:
+      return "approaching";
+    case FingerState::pressing:
+      return "pressing";
+    case FingerState::in_contact:
+      return "in_contact";
+    case FingerState::reacquiring:
+      return "reacquiring";
+    case FingerState::missed:
+      return "missed";
+  }
+  return "unknown";
+}
+
 /// Overall result of one update().
 enum class ControllerStatus : unsigned char {
   ok,               ///< manipulating, every finger in contact
@@ -126,6 +156,9 @@ enum class ControllerWarning : unsigned {
   /// held at its limit, a twist faster than the force loop). Counts as the grasp at risk
   /// for workspace_limited's cut
   over_max_force = 1u << 20,
+  /// grasp phase and after: some finger approached past the measured object's centre
+  /// without touching it and is left out (FingerState::missed; grasp.hpp)
+  grasp_finger_missed = 1u << 21,
 };
 template <>
 struct is_flags<ControllerWarning> : std::true_type {};

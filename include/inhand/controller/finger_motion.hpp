@@ -56,6 +56,11 @@ class FingerPoints {
   Vec virtual_point(const Vec& n) const noexcept {
     return chain() ? fingertip_surface_point(config_.chain, kin_, n) : input_.virtual_contact_point;
   }
+  /// The point a finger that misses is judged by (grasp.hpp): the fingertip sphere's centre
+  /// (external: the virtual contact point, the only point known without contact).
+  Vec miss_point() const noexcept {
+    return chain() ? kin_.fingertip.position : input_.virtual_contact_point;
+  }
   /// The Jacobian (Dim x DOF) of the point p attached to the fingertip.
   void jacobian(const Vec& p, typename Types::Jacobian& J) const noexcept {
     if (chain()) {
