@@ -39,7 +39,7 @@ inline const char* to_string(FingerState s) noexcept {
 
 /// Overall result of one update().
 enum class ControllerStatus : unsigned char {
-  ok,               ///< manipulating, every finger in contact
+  ok,               ///< manipulating, every finger in contact (but those left out: missed)
   grasping,         ///< grasp phase running
   grasped,          ///< grasp complete: every finger presses with the nominal force
   contact_lost,     ///< manipulating, at least one finger is reacquiring its contact
