@@ -616,4 +616,86 @@ TEST(ContactIkFourJoint, DampedSolveIsFiniteAndCorrect) {
   run(float{}, 2e-2);
 }
 
+// A run-time DOF bounded at compile time (ContactIk<S, Dim, Dynamic, MaxDof>) solves over
+// fixed-size views for its joint count (controller/ik.hpp, solve_sized): the result must
+// be the fixed-DOF solver's. Random 3 x K and 2 x K Jacobians, K = 1..5 (tall, square,
+// wide), half of them near-singular (damped), velocity limits that bind in a third of the
+// samples, a joint-position box that binds in a quarter (the box re-solve, with the normal
+// weighted), the certified and the exact sigma_min. Asserted: the same status, held joints
+// and figures, and theta_dot equal to a few units in the last place of its largest entry
+// (the same operations; a compiler may contract them differently in the two instances).
+// A fixed 3 x 1 solver does not exist (Eigen has no 1 x 3 column-major pseudo-inverse):
+// K = 1 is compared with the run-time-unbounded solver, whose code for one column is the
+// same.
+template <typename S, int Dim, int K, typename Reference = inhand::ContactIk<S, Dim, K, K>>
+void expect_bounded_equals_fixed(Rng& rng, int count, double ulps) {
+  inhand::IkParams<S> params;
+  params.exact_min_singular_value = (count % 2) == 1;
+  Reference fixed(K, params);
+  inhand::ContactIk<S, Dim, Eigen::Dynamic, 5> bounded(K, params);
+  using FixedJ = typename Reference::Jacobian;
+  using BoundedJ = typename inhand::ContactIk<S, Dim, Eigen::Dynamic, 5>::Jacobian;
+  using FixedV = typename Reference::JointVector;
+  using BoundedV = typename inhand::ContactIk<S, Dim, Eigen::Dynamic, 5>::JointVector;
+  const double eps = static_cast<double>(std::numeric_limits<S>::epsilon());
+  for (int t = 0; t < count; ++t) {
+    const int k = std::min(Dim, K);
+    VecXd sv = random_singular_values(k, 0.05, 2.0, rng);
+    if (t % 2 == 1) sv(k - 1) = std::exp(uniform(rng, std::log(1e-6), std::log(4e-3)));
+    const FixedJ Jf = matrix_with_singular_values(Dim, K, sv, rng).cast<S>();
+    // Element by element: GCC 12 reports a vectorised copy of a small fixed float matrix
+    // into a bounded one as reading past it (-Warray-bounds, a false positive).
+    BoundedJ Jb(Dim, K);
+    for (int c = 0; c < K; ++c)
+      for (int r = 0; r < Dim; ++r) Jb(r, c) = Jf(r, c);
+    const Eigen::Matrix<S, Dim, 1> xd = gaussian_vector(Dim, rng).cast<S>();
+    FixedV vmax(K), lo(K), hi(K);
+    for (int i = 0; i < K; ++i) {
+      vmax(i) = static_cast<S>(t % 3 == 0 ? uniform(rng, 0.05, 0.5) : 1e3);
+      lo(i) = static_cast<S>(t % 4 == 0 ? -uniform(rng, 0.0, 0.3) : -1e3);
+      hi(i) = static_cast<S>(t % 4 == 0 ? uniform(rng, 0.0, 0.3) : 1e3);
+    }
+    BoundedV vmax_b(K), lo_b(K), hi_b(K);
+    for (int i = 0; i < K; ++i) {
+      vmax_b(i) = vmax(i);
+      lo_b(i) = lo(i);
+      hi_b(i) = hi(i);
+    }
+    const Eigen::Matrix<S, Dim, 1> normal = gaussian_vector(Dim, rng).normalized().cast<S>();
+    FixedV qf = FixedV::Zero(K);
+    BoundedV qb = BoundedV::Zero(K);
+    const auto rf = fixed.solve(Jf, xd, vmax, lo, hi, normal, qf);
+    const auto rb = bounded.solve(Jb, xd, vmax_b, lo_b, hi_b, normal, qb);
+    ASSERT_EQ(rf.status, rb.status) << "K " << K << " sample " << t;
+    ASSERT_EQ(rf.held_joints, rb.held_joints) << "K " << K << " sample " << t;
+    ASSERT_EQ(rf.min_singular_value_exact, rb.min_singular_value_exact);
+    ASSERT_EQ(qb.size(), K);
+    const double scale = std::max(1.0, static_cast<double>(qf.cwiseAbs().maxCoeff()));
+    const double tol = ulps * eps * scale;
+    ASSERT_LE((qf.template cast<double>() - qb.template cast<double>()).cwiseAbs().maxCoeff(), tol)
+        << "K " << K << " sample " << t << " status " << inhand::to_string(rf.status);
+    ASSERT_NEAR(static_cast<double>(rf.damping), static_cast<double>(rb.damping),
+                ulps * eps * std::max(1.0, static_cast<double>(rf.damping)));
+    ASSERT_NEAR(static_cast<double>(rf.limit_scale), static_cast<double>(rb.limit_scale),
+                ulps * eps);
+  }
+}
+
+TEST(ContactIkBoundedStorage, SolvesAsTheFixedSizeSolver) {
+  Rng rng(5150);
+  const int count = sweep_count(200);
+  for (int pass = 0; pass < 2; ++pass) {
+    const int c = count + pass;  // an odd count asks for the exact sigma_min
+    expect_bounded_equals_fixed<double, 3, 1, inhand::ContactIk<double, 3, Eigen::Dynamic>>(rng, c,
+                                                                                            16);
+    expect_bounded_equals_fixed<double, 3, 2>(rng, c, 16);
+    expect_bounded_equals_fixed<double, 3, 3>(rng, c, 16);
+    expect_bounded_equals_fixed<double, 3, 4>(rng, c, 16);
+    expect_bounded_equals_fixed<double, 3, 5>(rng, c, 16);
+    expect_bounded_equals_fixed<double, 2, 3>(rng, c, 16);
+    expect_bounded_equals_fixed<float, 3, 4>(rng, c, 16);
+    expect_bounded_equals_fixed<float, 3, 2>(rng, c, 16);
+  }
+}
+
 }  // namespace

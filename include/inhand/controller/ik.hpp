@@ -27,59 +27,22 @@
 // miss lands in the tangent plane. W acts only when joints are held.
 // Invalid input (non-finite J, x_dot, limits, box or z, or finite values so large that
 // the solution overflows, e.g. |J|^2 > the largest Scalar): theta_dot = 0, status
-// invalid_input.
-// Units: x_dot in m/s, theta_dot in rad/s. noexcept; fixed sizes never allocate.
+// invalid_input. Units: x_dot in m/s, theta_dot in rad/s. noexcept; a fixed or bounded DOF
+// never allocates, and a bounded one runs the fixed-DOF code of its joint count.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
+#include "inhand/controller/ik_params.hpp"
 #include "inhand/controller/ik_report.hpp"
 #include "inhand/math/box_least_squares.hpp"
 #include "inhand/math/damped_least_squares.hpp"
 #include "inhand/math/flags.hpp"
 
 namespace inhand {
-
-/// The joint-velocity box [rad/s] that keeps joint positions q inside
-/// [lower + margin, upper - margin] over a tick of dt seconds: a joint inside may move
-/// up to its bound, a joint already beyond it may not move further out (its bound is 0),
-/// so lo <= 0 <= hi always. All vectors of one size; dt > 0, margin >= 0 (rad).
-template <typename JointVector, typename Scalar>
-void joint_position_box(const JointVector& q, const JointVector& lower, const JointVector& upper,
-                        Scalar margin, Scalar dt, JointVector& lo, JointVector& hi) noexcept {
-  for (int i = 0; i < static_cast<int>(q.size()); ++i) {
-    lo(i) = std::min(Scalar(0), (lower(i) + margin - q(i)) / dt);
-    hi(i) = std::max(Scalar(0), (upper(i) - margin - q(i)) / dt);
-  }
-}
-
-template <typename Scalar>
-struct IkParams {
-  DampingSchedule<Scalar> damping{};
-  /// Joint position limits (FingerChain joints' lower/upper) enforced in the controller's
-  /// IK with this margin [rad] inside each limit; false: only the velocity limits act.
-  bool joint_limits = true;
-  Scalar joint_limit_margin = Scalar(0.01);
-  /// false: sigma_min of a 3-row Jacobian is computed only inside the damped region
-  /// (outside it a factorisation certifies sigma_min >= epsilon and the report gives
-  /// epsilon, min_singular_value_exact false); the command is the same (to rounding at
-  /// sigma_min = epsilon, where the damping is continuous and 0). true: always.
-  bool exact_min_singular_value = false;
-  /// Weight w >= 1 of the contact normal when joints are held (normal priority, top of this
-  /// file); 1: every direction alike.
-  Scalar limited_normal_weight = Scalar(10);
-  /// Field names relative to the controller Config ("ik.damping.max_damping").
-  Validation validate() const noexcept {
-    if (!is_finite(joint_limit_margin) || !(joint_limit_margin >= Scalar(0)))
-      return Validation::invalid("ik.joint_limit_margin", "must be finite and >= 0");
-    if (!is_finite(limited_normal_weight) || !(limited_normal_weight >= Scalar(1)))
-      return Validation::invalid("ik.limited_normal_weight", "must be finite and >= 1");
-    return damping.validate(
-        DampingScheduleNames{"ik.damping.singular_threshold", "ik.damping.max_damping"});
-  }
-};
 
 /// Contact-point IK for a Dim x Dof Jacobian. Dof and MaxDof follow FingerChain:
 /// exact, run-time bounded (Dynamic, MaxDof), or run-time unbounded (Dynamic, Dynamic).
@@ -158,9 +121,55 @@ class ContactIk {
                               JointVector& theta_dot, const JointVector* lo, const JointVector* hi,
                               const CartesianVector* normal = nullptr) noexcept;
 
+  struct Given {  ///< the caller's J, box and theta_dot (the box re-solve, the null space)
+    const Jacobian& J;
+    const JointVector* lo;
+    const JointVector* hi;
+    JointVector& theta_dot;
+  };
+  /// The solve of the top of this file over views V of the joint vectors and JV of J:
+  /// the caller's own types, or fixed-size maps of them (solve_sized).
+  template <typename JV, typename V, typename OutV>
+  IkReport<Scalar> solve_views(const JV& J, const CartesianVector& x_dot, const V& max_velocity,
+                               const JointVector* z, OutV& theta_dot, const V* lo, const V* hi,
+                               const CartesianVector* normal, const Given& given) noexcept;
+
+  /// Bounded run-time DOF (MaxDof fixed, at most kMaxSized): the solve runs on fixed-size
+  /// maps of J and the vectors for the joint count K = J.cols(), one instantiation per K,
+  /// whose loops unroll as for a fixed Dof (the fixed-Dof solver's operations). Other
+  /// sizes, the null-space term and mismatched vector sizes use the views as given.
+  static constexpr int kMaxSized = 8;
+  static constexpr bool kSized = N == Eigen::Dynamic && MaxN != Eigen::Dynamic && MaxN <= kMaxSized;
+  template <int K>
+  IkReport<Scalar> solve_sized(const Jacobian& J, const CartesianVector& x_dot,
+                               const JointVector& max_velocity, JointVector& theta_dot,
+                               const JointVector* lo, const JointVector* hi,
+                               const CartesianVector* normal) noexcept {
+    if constexpr (K <= MaxN) {
+      if (J.cols() != K)
+        return solve_sized<K + 1>(J, x_dot, max_velocity, theta_dot, lo, hi, normal);
+      using JMap = Eigen::Map<const Eigen::Matrix<Scalar, Dim, K>>;
+      using VMap = Eigen::Map<const Eigen::Matrix<Scalar, K, 1>>;
+      using OutMap = Eigen::Map<Eigen::Matrix<Scalar, K, 1>>;
+      theta_dot.resize(K);
+      const JMap Jk(J.data());
+      const VMap vk(max_velocity.data());
+      const bool boxed = lo != nullptr && hi != nullptr;
+      const VMap lok(boxed ? lo->data() : max_velocity.data());
+      const VMap hik(boxed ? hi->data() : max_velocity.data());
+      OutMap out(theta_dot.data());
+      return solve_views(Jk, x_dot, vk, nullptr, out, boxed ? &lok : nullptr,
+                         boxed ? &hik : nullptr, normal, Given{J, lo, hi, theta_dot});
+    } else {
+      return solve_views(J, x_dot, max_velocity, nullptr, theta_dot, lo, hi, normal,
+                         Given{J, lo, hi, theta_dot});
+    }
+  }
+
   /// Factorises J by the damping schedule and copies the factorisation's figures into
   /// `report`; false, with `report.status` invalid_input, if it is not valid (J not finite).
-  bool factorize(const Jacobian& J, IkReport<Scalar>& report) noexcept {
+  template <typename JV>
+  bool factorize(const JV& J, IkReport<Scalar>& report) noexcept {
     const auto f = dls_.factorize(J, params_.damping, params_.exact_min_singular_value);
     if (!f.valid) {
       report.status = IkStatus::invalid_input;
@@ -171,23 +180,6 @@ class ContactIk {
     report.damping = f.damping;
     if (f.damped) report.status = report.status | IkStatus::damped;
     return true;
-  }
-
-  /// Velocity limits > 0 (NaN fails), and a box [lo, hi] (if given) of this solver's size,
-  /// finite, with lo <= 0 <= hi. One pass over the joints.
-  static bool limits_valid(const JointVector& max_velocity, const JointVector* lo,
-                           const JointVector* hi, int n) noexcept {
-    bool ok = max_velocity.size() == n;
-    const bool boxed = lo != nullptr && hi != nullptr;
-    if (boxed) ok = ok && lo->size() == n && hi->size() == n;
-    if (!ok) return false;
-    for (int i = 0; i < n; ++i) ok = ok && max_velocity(i) > Scalar(0);
-    if (boxed) {
-      for (int i = 0; i < n; ++i)
-        ok = ok && (*lo)(i) <= Scalar(0) && (*hi)(i) >= Scalar(0) && is_finite((*lo)(i)) &&
-             is_finite((*hi)(i));
-    }
-    return ok;
   }
 
   IkParams<Scalar> params_;
@@ -224,34 +216,53 @@ IkReport<Scalar> ContactIk<Scalar, Dim, Dof, MaxDof>::solve_impl(
     const Jacobian& J, const CartesianVector& x_dot, const JointVector& max_velocity,
     const JointVector* z, JointVector& theta_dot, const JointVector* lo, const JointVector* hi,
     const CartesianVector* normal) noexcept {
+  if constexpr (kSized) {
+    const Eigen::Index n = J.cols();
+    if (z == nullptr && n >= 1 && n == dls_.cols() && max_velocity.size() == n &&
+        (lo == nullptr || hi == nullptr || (lo->size() == n && hi->size() == n)))
+      return solve_sized<1>(J, x_dot, max_velocity, theta_dot, lo, hi, normal);
+  }
+  return solve_views(J, x_dot, max_velocity, z, theta_dot, lo, hi, normal,
+                     Given{J, lo, hi, theta_dot});
+}
+
+template <typename Scalar, int Dim, int Dof, int MaxDof>
+template <typename JV, typename V, typename OutV>
+IkReport<Scalar> ContactIk<Scalar, Dim, Dof, MaxDof>::solve_views(
+    const JV& J, const CartesianVector& x_dot, const V& max_velocity, const JointVector* z,
+    OutV& theta_dot, const V* lo, const V* hi, const CartesianVector* normal,
+    const Given& given) noexcept {
   IkReport<Scalar> report;
   const bool boxed = lo != nullptr && hi != nullptr;
   // J is checked by the factorisation below (a non-finite J makes it invalid).
   if (!all_finite(x_dot) || (z != nullptr && !all_finite(*z)) ||
-      !limits_valid(max_velocity, lo, hi, static_cast<int>(J.cols()))) {
-    theta_dot.setZero();
+      !detail::ik_limits_valid(max_velocity, lo, hi, static_cast<int>(J.cols()))) {
+    given.theta_dot.setZero();
     report.status = IkStatus::invalid_input;
     return report;
   }
   if (!factorize(J, report)) {
-    theta_dot.setZero();
+    given.theta_dot.setZero();
     return report;
   }
   dls_.solve(J, x_dot, theta_dot);
-  if (z != nullptr && dls_.cols() > Dim) {
-    dls_.pseudo_inverse(J, pinv_);
-    // theta_dot += (I - J^+ J) z, evaluated as z - J^+ (J z): no n x n temporary.
-    ns_.noalias() = pinv_ * (J * (*z));
-    theta_dot += *z - ns_;
+  if constexpr (std::is_same_v<OutV, JointVector>) {  // the views as given
+    if (z != nullptr && dls_.cols() > Dim) {
+      dls_.pseudo_inverse(given.J, pinv_);
+      // theta_dot += (I - J^+ J) z, evaluated as z - J^+ (J z): no n x n temporary.
+      ns_.noalias() = pinv_ * (given.J * (*z));
+      theta_dot += *z - ns_;
+    }
   }
   if (!all_finite(theta_dot)) {  // finite but enormous J, x_dot or z: overflow
-    theta_dot.setZero();
+    given.theta_dot.setZero();
     report = IkReport<Scalar>{};
     report.status = IkStatus::invalid_input;
     return report;
   }
   if (boxed &&
       !((theta_dot.array() >= lo->array()).all() && (theta_dot.array() <= hi->array()).all())) {
+    // The box re-solve (rare: a joint about to cross its limit) on the caller's types.
     const Scalar l2 = report.damping * report.damping;
     const Scalar length = normal != nullptr ? normal->norm() : Scalar(0);
     const Scalar extra = params_.limited_normal_weight - Scalar(1);  // w - 1
@@ -259,11 +270,11 @@ IkReport<Scalar> ContactIk<Scalar, Dim, Dof, MaxDof>::solve_impl(
     if (extra > Scalar(0) && length > Scalar(0) && is_finite(length)) {
       // W J and W x_dot with W = I + (w - 1) n n^T, n the unit normal.
       const CartesianVector n = *normal / length;
-      weighted_.noalias() = J + (extra * n) * (n.transpose() * J);
+      weighted_.noalias() = given.J + (extra * n) * (n.transpose() * given.J);
       const CartesianVector b = x_dot + (extra * n.dot(x_dot)) * n;
-      held = box_.solve(weighted_, b, l2, *lo, *hi, theta_dot);
+      held = box_.solve(weighted_, b, l2, *given.lo, *given.hi, given.theta_dot);
     } else {
-      held = box_.solve(J, x_dot, l2, *lo, *hi, theta_dot);
+      held = box_.solve(given.J, x_dot, l2, *given.lo, *given.hi, given.theta_dot);
     }
     report.held_joints = held.held;
     if (held.held != 0) report.status = report.status | IkStatus::position_limited;

@@ -69,13 +69,23 @@ class DampedLeastSquares {
   /// of one 3 x 3 factorisation instead of the eigenvalue computation; the result then
   /// reports epsilon as a lower bound (min_singular_value_exact false). The damping,
   /// and so the solution, are the same either way. k <= 2 is always exact (closed form).
-  Result factorize(const Matrix& J, const DampingSchedule<Scalar>& schedule,
+  ///
+  /// J is a Matrix or any M-row Eigen expression of the same column count cols(); one
+  /// whose column count is fixed at compile time (a fixed-size view of a bounded J,
+  /// controller/ik.hpp) runs the compile-time-sized code: the Gram product and the
+  /// Cholesky factorisation unrolled, as for a fixed N. Its result is that of the
+  /// fixed-N solver of that size, bitwise.
+  template <typename DerivedJ>
+  Result factorize(const Eigen::MatrixBase<DerivedJ>& J, const DampingSchedule<Scalar>& schedule,
                    bool exact_min_singular_value = true) noexcept {
+    static_assert(DerivedJ::RowsAtCompileTime == M, "J has M rows");
+    constexpr int C = DerivedJ::ColsAtCompileTime;
+    constexpr int KC = C == Eigen::Dynamic ? kFixedK : (C < M ? C : M);
     Result r;
     factored_ = false;
-    if (!all_finite(J) || k_ < 1) return r;
+    if (!all_finite(J) || k_ < 1 || J.cols() != n_) return r;
     wide_ = n_ >= M;
-    if (wide_ && N != Eigen::Dynamic) {
+    if constexpr (C != Eigen::Dynamic && C >= M) {
       gram_.template topLeftCorner<M, M>().noalias() = J * J.transpose();
     } else if (wide_) {  // run-time N: a sum of outer products of the fixed-size columns
       Eigen::Matrix<Scalar, M, M> g = Eigen::Matrix<Scalar, M, M>::Zero();
@@ -93,7 +103,7 @@ class DampedLeastSquares {
             gram_, schedule.singular_threshold * schedule.singular_threshold)) {
       r.min_singular_value = schedule.singular_threshold;
       r.min_singular_value_exact = false;
-      factored_ = cholesky(Scalar(0));
+      factored_ = cholesky<KC>(Scalar(0));
       r.valid = factored_;
       return r;
     }
@@ -103,15 +113,25 @@ class DampedLeastSquares {
     const Scalar l2 = schedule.damping_squared(r.min_singular_value);
     r.damping = std::sqrt(l2);
     r.damped = l2 > Scalar(0);
-    factored_ = cholesky(l2);
+    factored_ = cholesky<KC>(l2);
     r.valid = factored_;
     return r;
   }
 
-  /// x = J^+_lambda b for the last factorised J. Writes zero if not factorised.
-  void solve(const Matrix& J, const Rhs& b, Solution& x) noexcept {
+  /// x = J^+_lambda b for the last factorised J (a Matrix, or the same view factorize()
+  /// was given; x a Solution or a vector of its fixed size). Writes zero if not factorised.
+  template <typename DerivedJ, typename DerivedX>
+  void solve(const Eigen::MatrixBase<DerivedJ>& J, const Rhs& b,
+             Eigen::MatrixBase<DerivedX>& x) noexcept {
+    constexpr int C = DerivedJ::ColsAtCompileTime;
+    constexpr int KC = C == Eigen::Dynamic ? kFixedK : (C < M ? C : M);
+    constexpr bool kResizable = DerivedX::SizeAtCompileTime == Eigen::Dynamic;
     if (!factored_) {
-      x.setZero(n_);
+      if constexpr (kResizable) {
+        x.derived().setZero(n_);
+      } else {
+        x.setZero();
+      }
       return;
     }
     // Zero-initialised: for M < 3 the unused tail would otherwise trip GCC 12's
@@ -119,16 +139,19 @@ class DampedLeastSquares {
     Eigen::Matrix<Scalar, 3, 1> y = Eigen::Matrix<Scalar, 3, 1>::Zero();
     if (wide_) {
       y.template head<M>() = b;
-      cholesky_solve(y);
-      x.noalias() = J.transpose() * y.template head<M>();
-    } else if constexpr (kTallPossible) {
+      cholesky_solve<KC>(y);
+      x.derived().noalias() = J.transpose() * y.template head<M>();
+    } else if constexpr (C == Eigen::Dynamic ? kTallPossible : C < M) {
       for (int a = 0; a < k_; ++a) y(a) = J.col(a).dot(b);
-      cholesky_solve(y);
+      cholesky_solve<KC>(y);
       // Element-wise: a vectorised copy of y.head(k_) draws GCC 12 -Warray-bounds
       // false positives for float run-time column counts.
-      x.resize(k_);
+      if constexpr (kResizable) x.derived().resize(k_);
       for (int a = 0; a < k_; ++a) x(a) = y(a);
     }
+  }
+  void solve(const Matrix& J, const Rhs& b, Solution& x) noexcept {
+    solve<Matrix, Solution>(J, b, x);
   }
 
   /// The damped pseudo-inverse J^+_lambda (n x m) of the last factorised J.
@@ -144,14 +167,14 @@ class DampedLeastSquares {
       for (int c = 0; c < M; ++c) {
         y.setZero();
         y(c) = Scalar(1);
-        cholesky_solve(y);
+        cholesky_solve<kFixedK>(y);
         inv.col(c) = y.template head<M>();
       }
       out.noalias() = J.transpose() * inv;
     } else if constexpr (kTallPossible) {  // (G + l^2 I)^-1 J^T
       for (int c = 0; c < M; ++c) {
         for (int a = 0; a < k_; ++a) y(a) = J(c, a);
-        cholesky_solve(y);
+        cholesky_solve<kFixedK>(y);
         for (int a = 0; a < k_; ++a) out(a, c) = y(a);
       }
     }
@@ -179,20 +202,22 @@ class DampedLeastSquares {
 
   /// Cholesky of the leading k x k block of G + l2 I into chol_ (lower). false if
   /// not positive definite (only possible for a rank-deficient J with l2 == 0).
-  /// The size is a template argument so that the tiny loops unroll: it is known at
-  /// compile time for a fixed N and dispatched once (k = 1, 2 or 3) otherwise.
+  /// The size is a template argument so that the tiny loops unroll: KC = k when it is
+  /// known at compile time (a fixed N or a fixed-size view), 0 to dispatch once on k.
+  template <int KC>
   bool cholesky(Scalar l2) noexcept {
-    if constexpr (kFixedK > 0) {
-      return cholesky_k<kFixedK>(l2);
+    if constexpr (KC > 0) {
+      return cholesky_k<KC>(l2);
     } else {
       if (k_ == 1) return cholesky_k<1>(l2);
       if (k_ == 2) return cholesky_k<(M < 2 ? M : 2)>(l2);
       return cholesky_k<M>(l2);
     }
   }
+  template <int KC>
   void cholesky_solve(Eigen::Matrix<Scalar, 3, 1>& y) const noexcept {
-    if constexpr (kFixedK > 0) {
-      cholesky_solve_k<kFixedK>(y);
+    if constexpr (KC > 0) {
+      cholesky_solve_k<KC>(y);
     } else if (k_ == 1) {
       cholesky_solve_k<1>(y);
     } else if (k_ == 2) {
