@@ -344,12 +344,17 @@ TEST(GraspBalance, TheBalancingFingerEndsWhereTheSqueezeHasNoCouple) {
   }
 }
 
-/// The paper's translation along X made 8 times longer (40 mm) takes the three-finger
-/// hand's thumb to a joint limit: the controller says so (workspace_limited), and with
-/// keep_twist_in_reach the object stops at the edge of the workspace and is kept, where
-/// without it (the twist then cut only on the ticks the force layer reports the grasp at
-/// risk) the other fingers carry it on and it is dropped (measured: 4 contact losses and
-/// dropped without, 4 and kept with; recorded as test properties).
+/// The paper's translation along X made 8 times longer (40 mm out and back) takes the
+/// Shadow-like hand's thumb to a joint limit: the controller says so (workspace_limited),
+/// and with keep_twist_in_reach the object stops at the edge of the workspace, is kept
+/// (every contact, not turned) and comes back with the trajectory. The metric's `dropped`
+/// (the pose error above its 20 mm drop distance) does not tell that apart from a drop here:
+/// the trajectory runs on past the edge by more than 20 mm. When the cut took only the held
+/// contact's motion along its normal, the contact stuck across it and the cylinder rolled
+/// on the fingertips by up to 1.79 rad, following the trajectory to within 19.6-21 mm; the
+/// cut now takes the held contact's whole unreachable direction (workspace_limits.hpp).
+/// Measured in the scenario runner's version of the case: 0 contact losses, 0.9 mrad at
+/// most, 0.05 mm at the end (before: 2 contact losses, 1.79 rad, 1.3 mm).
 TEST(WorkspaceEdge, ATranslationPastTheThumbsReachIsFlaggedAndKeptWhenCut) {
   for (bool cut : {false, true}) {
     ip::ScenarioSpec spec =
@@ -362,15 +367,19 @@ TEST(WorkspaceEdge, ATranslationPastTheThumbsReachIsFlaggedAndKeptWhenCut) {
         ++flagged;
     });
     ASSERT_TRUE(r.failure.empty()) << r.failure;
+    ASSERT_EQ(r.stages.size(), 3u);
     EXPECT_GT(flagged, 100) << "cut " << cut;
+    const ip::StageMetrics& task = r.stages.back();
     if (cut) {
-      EXPECT_FALSE(r.dropped);
+      EXPECT_EQ(r.contact_losses, 0);
+      EXPECT_LE(task.max_orientation_error, 0.05);
+      EXPECT_LE(task.final_position_error, 0.5e-3);
     }
     const std::string mode = cut ? "cut" : "default";
-    inhand_test::record(mode + "_dropped", r.dropped ? 1.0 : 0.0);
-    if (!r.stages.empty())
-      inhand_test::record(mode + "_contact_losses",
-                          static_cast<double>(r.stages.back().contact_losses));
+    inhand_test::record(mode + "_contact_losses", static_cast<double>(r.contact_losses));
+    inhand_test::record(mode + "_max_position_error_mm", task.max_position_error * 1e3);
+    inhand_test::record(mode + "_max_orientation_error_rad", task.max_orientation_error);
+    inhand_test::record(mode + "_final_position_error_mm", task.final_position_error * 1e3);
   }
 }
 

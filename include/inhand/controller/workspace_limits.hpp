@@ -15,11 +15,14 @@
 // cannot be made up by rolling or sliding: a contact asked to follow the object's surface
 // along n and held back opens, or is pressed harder, while the other fingers carry the
 // object on; the grasp deforms until a contact is lost. The part of b along n,
-// b_n = (b . n) n, is the constraint.
+// b_n = (b . n) n, is what the warning tests. Across n the held contact has to slide on
+// the object instead, against friction and against the force layer, which raises the
+// grip where it sees a contact slide: once the twist is cut, the whole of b is the
+// constraint (a = b), else a = b_n.
 //
 // The contact point p moves with x = v_o + omega_o x (p - p_o) for the object twist
 // V = (v_o; omega_o) [m/s; rad/s, world frame, about the measured object position p_o]
-// (eq. 2), linear in V: b_n^T x = c^T V with c_k = b_n^T x(e_k) over the basis twists e_k.
+// (eq. 2), linear in V: a^T x = c^T V with c_k = a^T x(e_k) over the basis twists e_k.
 // c^T V > 0 asks for what the held joint cannot give: ControllerWarning::workspace_limited
 // is raised. With Config::keep_twist_in_reach, and without it while the force layer reports
 // the grasp at risk and Config::at_risk_hold after (the caller's `cut`), the twist
@@ -85,10 +88,10 @@ bool keep_twist_in_reach(const Tick& tick, State& state, Scratch& scratch,
       servo.for_each_unreachable_direction(
           J, f.joint_positions, tick.dt, tol,
           [&](const Vec& b) {
-            const Vec bn = b.dot(n) * n;
+            const Vec a = cut ? b : Vec(b.dot(n) * n);
             TwistT c;
             for (int k = 0; k < c.size(); ++k)
-              c(k) = bn.dot(contact_point_velocity<Scalar, Types::kDim>(
+              c(k) = a.dot(contact_point_velocity<Scalar, Types::kDim>(
                   TwistT::Unit(c.size(), k), f.contact.contact_point, tick.object.position));
             const Scalar along = c.dot(twist), cc = c.squaredNorm();
             // A contact point so far out that c overflows gives no usable constraint.

@@ -150,9 +150,6 @@ class DampedLeastSquares {
       for (int a = 0; a < k_; ++a) x(a) = y(a);
     }
   }
-  void solve(const Matrix& J, const Rhs& b, Solution& x) noexcept {
-    solve<Matrix, Solution>(J, b, x);
-  }
 
   /// The damped pseudo-inverse J^+_lambda (n x m) of the last factorised J.
   template <typename DerivedOut>
