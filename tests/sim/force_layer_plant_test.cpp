@@ -442,6 +442,70 @@ TEST(WorkspaceEdge, TheAtRiskCutHoldsThroughTheFlagsFlicker) {
   for (const Run* r : {&without, &with, &sized}) EXPECT_LE(r->switches, 30);
 }
 
+/// The cut's property, read from the outputs: on a tick whose twist was cut at the edge, a
+/// three-joint finger with one joint at a position bound (less the IK's margin) is asked for
+/// no contact velocity that only that joint could give. Its other two columns of the
+/// contact Jacobian span a plane; b, the plane's unit normal signed towards the bound, has
+/// b . x > 0 for exactly the motions x out of reach, and the finger's desired contact
+/// velocity (eq. 2 of the cut twist) must have b . x <= 0 up to rounding. Wide campaign
+/// case 5217 (an 89 g sphere turned on the three-finger hand, the thumb's joint at its
+/// bound from 3.56 s): 1008 ticks checked, b . x at most 1e-15 m/s. When the cut took out
+/// only the part of b along the contact normal, this test failed on 324 ticks, the thumb
+/// asked for up to 2.7 mm/s along b (of 5.6 mm/s; the case dropped the sphere). Ticks on
+/// which more than one finger holds a joint are left out (two constraints are cut in turn,
+/// each sweep undoing a little of the other's).
+TEST(WorkspaceEdge, ACutTwistAsksAHeldFingerForNothingOutOfReach) {
+  namespace cp = inhand::examples::campaign;
+  cp::Case c = cp::make_case(5217, true);
+  const double margin = c.spec.controller.ik.joint_limit_margin;
+  long checked = 0;
+  double worst = 0.0;
+  const ip::ScenarioResult r = ip::ScenarioRunner().run(c.spec, [&](const ip::TickRecord& rec) {
+    if (!inhand::has(rec.output->warnings, inhand::ControllerWarning::workspace_cut)) return;
+    int held_finger = -1, held_joint = -1, held_count = 0;
+    double sign = 0.0;
+    for (std::size_t i = 0; i < rec.input->fingers.size(); ++i) {
+      const auto& f = rec.input->fingers[i];
+      if (!f.contact.touching) continue;
+      const ip::PlantFinger& chain = c.spec.hand.fingers[i];
+      const Eigen::VectorXd lo = chain.lower_limits(), hi = chain.upper_limits();
+      for (int j = 0; j < static_cast<int>(f.joint_positions.size()); ++j) {
+        const double q = f.joint_positions(j);
+        const bool up = q >= hi(j) - margin - 1e-4, down = q <= lo(j) + margin + 1e-4;
+        if (!up && !down) continue;
+        ++held_count;
+        held_finger = static_cast<int>(i);
+        held_joint = j;
+        sign = up ? 1.0 : -1.0;
+      }
+    }
+    if (held_count != 1) return;
+    const auto& f = rec.input->fingers[static_cast<std::size_t>(held_finger)];
+    const ip::PlantFinger& chain = c.spec.hand.fingers[static_cast<std::size_t>(held_finger)];
+    ASSERT_EQ(chain.dof(), 3);
+    inhand::FingerKinematics<ip::PlantFinger> ws(chain);
+    inhand::forward_kinematics(chain, f.joint_positions, ws);
+    Eigen::Matrix<double, 3, Eigen::Dynamic> J(3, 3);
+    inhand::point_jacobian(ws, f.contact.contact_point, J);
+    const int a = (held_joint + 1) % 3, b_col = (held_joint + 2) % 3;
+    Eigen::Vector3d b = J.col(a).cross(J.col(b_col));
+    if (!(b.norm() > 1e-9)) return;  // the other two columns are parallel: no plane
+    b.normalize();
+    if (sign * b.dot(J.col(held_joint)) < 0.0) b = -b;
+    const Eigen::Vector3d v =
+        rec.output->fingers[static_cast<std::size_t>(held_finger)].desired_contact_velocity;
+    const double along = b.dot(v);
+    worst = std::max(worst, along);
+    EXPECT_LE(along, 1e-9 + 1e-6 * v.norm()) << "t " << rec.time << " finger " << held_finger;
+    ++checked;
+  });
+  ASSERT_TRUE(r.failure.empty()) << r.failure;
+  EXPECT_GT(checked, 20);
+  EXPECT_FALSE(r.dropped);
+  inhand_test::record("ticks_checked", static_cast<double>(checked));
+  inhand_test::record("worst_along_mm_per_s", worst * 1e3);
+}
+
 /// The same along Y: the Shadow-like hand's three fingers each end with two joints at
 /// their limits (a redundant finger, whose other two columns then span a plane), which a
 /// held joint taken alone never shows. The warning comes while the object still follows
