@@ -12,6 +12,7 @@
 
 #include "campaign/campaign_cases.hpp"
 #include "common/test_support.hpp"
+#include "inhand/controller/workspace_limits.hpp"
 #include "inhand/sim/presets_allegro.hpp"
 #include "inhand/sim/scenario.hpp"
 
@@ -458,6 +459,7 @@ TEST(WorkspaceEdge, ACutTwistAsksAHeldFingerForNothingOutOfReach) {
   namespace cp = inhand::examples::campaign;
   cp::Case c = cp::make_case(5217, true);
   const double margin = c.spec.controller.ik.joint_limit_margin;
+  const double tol = inhand::detail::kHeldJointTolerance<double>;  // the cut's "held"
   long checked = 0;
   double worst = 0.0;
   const ip::ScenarioResult r = ip::ScenarioRunner().run(c.spec, [&](const ip::TickRecord& rec) {
@@ -471,7 +473,7 @@ TEST(WorkspaceEdge, ACutTwistAsksAHeldFingerForNothingOutOfReach) {
       const Eigen::VectorXd lo = chain.lower_limits(), hi = chain.upper_limits();
       for (int j = 0; j < static_cast<int>(f.joint_positions.size()); ++j) {
         const double q = f.joint_positions(j);
-        const bool up = q >= hi(j) - margin - 1e-4, down = q <= lo(j) + margin + 1e-4;
+        const bool up = q >= hi(j) - margin - tol, down = q <= lo(j) + margin + tol;
         if (!up && !down) continue;
         ++held_count;
         held_finger = static_cast<int>(i);
