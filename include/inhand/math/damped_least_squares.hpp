@@ -80,7 +80,7 @@ class DampedLeastSquares {
                    bool exact_min_singular_value = true) noexcept {
     static_assert(DerivedJ::RowsAtCompileTime == M, "J has M rows");
     constexpr int C = DerivedJ::ColsAtCompileTime;
-    constexpr int KC = C == Eigen::Dynamic ? kFixedK : (C < M ? C : M);
+    constexpr int KC = factor_size(C);
     Result r;
     factored_ = false;
     if (!all_finite(J) || k_ < 1 || J.cols() != n_) return r;
@@ -124,7 +124,7 @@ class DampedLeastSquares {
   void solve(const Eigen::MatrixBase<DerivedJ>& J, const Rhs& b,
              Eigen::MatrixBase<DerivedX>& x) noexcept {
     constexpr int C = DerivedJ::ColsAtCompileTime;
-    constexpr int KC = C == Eigen::Dynamic ? kFixedK : (C < M ? C : M);
+    constexpr int KC = factor_size(C);
     constexpr bool kResizable = DerivedX::SizeAtCompileTime == Eigen::Dynamic;
     if (!factored_) {
       if constexpr (kResizable) {
@@ -225,6 +225,11 @@ class DampedLeastSquares {
   }
   /// k = min(M, N) when N is fixed, otherwise 0 (run-time).
   static constexpr int kFixedK = N == Eigen::Dynamic ? 0 : (N < M ? N : M);
+  /// The Cholesky size for a J whose column count is C at compile time: min(M, C), or
+  /// kFixedK when C is run-time (factorize() and solve() must agree on it).
+  static constexpr int factor_size(int C) noexcept {
+    return C == Eigen::Dynamic ? kFixedK : (C < M ? C : M);
+  }
 
   template <int K>
   bool cholesky_k(Scalar l2) noexcept {
