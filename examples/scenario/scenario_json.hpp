@@ -288,6 +288,8 @@ inline plant::HandController::Config read_controller(ObjectReader r, bool& gravi
     fl.contact_damping =
         f.number("contact_damping", fl.contact_damping, Range::non_negative_up_to(1e6));
     fl.capacity_time = f.number("capacity_time", fl.capacity_time, Range::non_negative_up_to(10.0));
+    fl.capacity_slide_ratio =
+        f.number("capacity_slide_ratio", fl.capacity_slide_ratio, Range::closed(0.0, 1.0));
     fl.servo_stiffness =
         f.number("servo_stiffness", fl.servo_stiffness, Range::non_negative_up_to(1e6));
     fl.servo_damping = f.number("servo_damping", fl.servo_damping, Range::non_negative_up_to(1e6));

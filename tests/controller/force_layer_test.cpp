@@ -447,6 +447,37 @@ TEST(ForceLayer, LoadBeyondMaxForceIsReported) {
   EXPECT_LE(r.target.maxCoeff(), 6.0 + 1e-9);
 }
 
+/// A slide at the grip's cap that slows down (a pad's shear as a released object settles on
+/// it: the speed rises over 15 ms, then decays with 15 ms) is flagged as slip for longer
+/// than capacity_time but not reported beyond capacity; with capacity_slide_ratio 0 (any
+/// slide) it is. A slide that keeps its speed is (LoadBeyondMaxForceIsReported).
+TEST(ForceLayer, ASlideThatSlowsDownAtTheCapIsNotBeyondCapacity) {
+  for (const double ratio : {0.8, 0.0}) {
+    Grasp g;
+    Layer layer;
+    inhand::ForceLayerParams<double> p = layer.params();
+    p.capacity_slide_ratio = ratio;
+    layer.set_params(p);
+    Layer::Result r;
+    int slipping_ticks = 0, capped_ticks = 0;
+    bool beyond = false;
+    for (int t = 0; t < 300; ++t) {
+      const double time = 1e-3 * t;
+      const double speed = 0.04 * (time < 0.015 ? time / 0.015 : std::exp(-(time - 0.015) / 0.015));
+      g.steps(0, 0) = 1e-3 * speed;  // [m] per 1 ms tick
+      g.points(0, 0) += 1e-3 * speed;
+      layer.update(g.step(), r);
+      const bool slipping = inhand::has(r.status, inhand::ForceLayerStatus::slipping);
+      slipping_ticks += slipping ? 1 : 0;
+      // The cap binds from the first free tick (release_grip 2 = max_force / the thumb's 3).
+      capped_ticks += slipping && r.grip >= 2.0 - 1e-9 ? 1 : 0;
+      beyond = beyond || inhand::has(r.status, inhand::ForceLayerStatus::beyond_capacity);
+    }
+    EXPECT_GT(capped_ticks, static_cast<int>(p.capacity_time / 1e-3) + 5) << "ratio " << ratio;
+    EXPECT_EQ(beyond, ratio == 0.0) << "ratio " << ratio << ", slipping " << slipping_ticks;
+  }
+}
+
 /// A touching finger that measures more than max_force (which no target asks for) is
 /// reported with the object free, whichever finger it is; at max_force, on a finger not
 /// touching, or while the grasp holds the object, it is not.
@@ -709,6 +740,11 @@ TEST(ForceLayer, ParamsNameTheField) {
   p = {};
   p.capacity_time = -1.0;
   EXPECT_STREQ(p.validate().field, "force_layer.capacity_time");
+  p = {};
+  p.capacity_slide_ratio = 1.5;
+  EXPECT_STREQ(p.validate().field, "force_layer.capacity_slide_ratio");
+  p.capacity_slide_ratio = 1.0;
+  EXPECT_TRUE(p.validate().ok());
   p = {};
   p.servo_stiffness = -1.0;
   EXPECT_STREQ(p.validate().field, "force_layer.servo_stiffness");

@@ -520,14 +520,14 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
         fa.stiffness_window, fa.min_excitation,  fa.min_fit,         fa.max_integral_velocity,
         fa.slip_distance,    fa.grip_rise_rate,  fa.friction_margin, fa.grip_decay_time,
         fa.release_grip,     fa.rigid_tolerance, fa.contact_damping, fa.capacity_time,
-        fa.servo_stiffness,  fa.servo_damping,   fa.release_load};
+        fa.servo_stiffness,  fa.servo_damping,   fa.release_load,    fa.capacity_slide_ratio};
     const double want_fl[] = {
         fb.bandwidth,        fb.integral_corner, fb.min_stiffness,   fb.max_stiffness,
         fb.stiffness_window, fb.min_excitation,  fb.min_fit,         fb.max_integral_velocity,
         fb.slip_distance,    fb.grip_rise_rate,  fb.friction_margin, fb.grip_decay_time,
         fb.release_grip,     fb.rigid_tolerance, fb.contact_damping, fb.capacity_time,
-        fb.servo_stiffness,  fb.servo_damping,   fb.release_load};
-    for (std::size_t k = 0; k < 19; ++k)
+        fb.servo_stiffness,  fb.servo_damping,   fb.release_load,    fb.capacity_slide_ratio};
+    for (std::size_t k = 0; k < 20; ++k)
       EXPECT_EQ(got_fl[k], want_fl[k]) << "force_layer field " << k;
     EXPECT_TRUE(f.gravity_from_plant);  // "plant": the plant's gravity, told
     EXPECT_EQ(fa.gravity_direction, got.plant.gravity);

@@ -44,6 +44,7 @@
 // the flag some 30 ms after a step: a compliant pad that shears by 0.4 mm when the
 // released object settles on it has moved, but it holds (it is not sliding). Noise in
 // the measured pose and joint angles does not accumulate: the sums of the steps telescope.
+// update() also reports the sliding fingers' largest lead |s - s_f|, the slide's speed.
 //
 // Both are reset per finger at a touch onset (start()); update() touches only the
 // touching fingers. noexcept; fixed finger counts never allocate.
@@ -202,27 +203,35 @@ class SlipDetector {
     fast_.col(i).setZero();
     slow_.col(i).setZero();
   }
+  /// What update() found this tick.
+  struct Report {
+    bool any = false;  ///< some touching finger slides
+    /// The largest lead |s - s_f| [m] of the sliding fingers (0 if none): the slide's speed
+    /// as the 10 ms filter sees it, 0.01 s * v for a steady slide at v.
+    Scalar lead = Scalar(0);
+  };
   /// One tick. For the touching fingers: `steps` the contact's relative step d over the
   /// tick [m] and the outward unit normals (world frame). Sets slipping(i) for the
-  /// touching fingers that slide (only when `object_free`: a held object cannot slip)
-  /// and returns whether any does.
-  bool update(const Mask& touching, const Points& steps, const Points& normals, bool object_free,
-              Scalar slip_distance, Scalar dt, Mask& slipping) noexcept {
+  /// touching fingers that slide (only when `object_free`: a held object cannot slip).
+  Report update(const Mask& touching, const Points& steps, const Points& normals, bool object_free,
+                Scalar slip_distance, Scalar dt, Mask& slipping) noexcept {
     const Scalar af = Scalar(1) - std::exp(-dt / Scalar(0.01));
     const Scalar as = Scalar(1) - std::exp(-dt / Scalar(0.1));
-    bool any = false;
+    Report r;
     for (int i = 0; i < static_cast<int>(slip_.cols()); ++i) {
       if (!touching(i)) continue;
       slip_.col(i) += steps.col(i) - steps.col(i).dot(normals.col(i)) * normals.col(i);
       fast_.col(i) += af * (slip_.col(i) - fast_.col(i));
       slow_.col(i) += as * (slip_.col(i) - slow_.col(i));
+      const Scalar lead = (slip_.col(i) - fast_.col(i)).norm();
       if (object_free && (fast_.col(i) - slow_.col(i)).norm() > slip_distance &&
-          Scalar(18) * (slip_.col(i) - fast_.col(i)).norm() >= slip_distance) {
+          Scalar(18) * lead >= slip_distance) {
         slipping(i) = 1;
-        any = true;
+        r.any = true;
+        r.lead = std::max(r.lead, lead);
       }
     }
-    return any;
+    return r;
   }
 
  private:

@@ -3,9 +3,8 @@
 //
 // Frames, units, signs: world frame, SI. n_i is the object's OUTWARD unit normal at
 // finger i's contact; forces are normal-force magnitudes >= 0 [N]; the force finger i
-// exerts on the object is -f_i n_i. The layer's output u_i [m/s] is the fingertip
-// velocity INTO the object along -n_i (u_i > 0 presses harder); the controller adds
-// -u_i n_i to the finger's motion command (eq. 7).
+// exerts on the object is -f_i n_i. The output u_i [m/s] is the fingertip velocity INTO the
+// object along -n_i (u_i > 0 presses harder), added as -u_i n_i to the motion (eq. 7).
 //
 // One equilibrium. A vector of normal forces f splits into
 //   rigid    : range(A)          -- the part that has a resultant wrench on the object
@@ -32,33 +31,30 @@
 // z^2 - z + a = 0, a = rho w_c T, is stable for a < 1: at the default w_c = 40 rad/s
 // and T = 1 ms a stiffness under-estimated by up to rho = 25 times is still stable
 // (docs/force_layer.md gives the phase margin with actuator lag).
-// The contact's damping c [N s/m] answers a commanded velocity within the tick: with
-// no actuator lag the loop through it is f_{n+1} = ... - c kp f_n, kp = w_c / k_i, a
-// root near -c kp, unstable (a period-2 oscillation) once c kp >= 1 -- at 500 N/m and
-// 10 N s/m, c kp = 0.8 with the true stiffness, 1.1 with an estimate 27 % low. So kp
-// is capped at 1 / (2 c) (c: the larger of contact_damping and the servo's feedthrough; the
-// root at -1/2 or nearer 0): on a damped contact the loop crosses over below w_c (k / (2 c)).
+// The contact's damping c [N s/m] answers a commanded velocity within the tick: the loop
+// through it, f_{n+1} = ... - c kp f_n (kp = w_c / k_i), oscillates at period 2 once
+// c kp >= 1 (500 N/m, 10 N s/m: c kp = 0.8, 1.1 with k_i 27 % low). So kp <= 1 / (2 c) (c:
+// the larger of contact_damping and the servo's feedthrough): the loop then crosses over
+// below w_c on a damped contact (at k / (2 c)).
 //
 // Grip that follows the load. s is the largest of
 //   1                 the nominal grip (the planner's pattern);
-//   s_release         Step::release_grip (the grasp's s_g, release_grip.hpp; 0: release_grip) on
-//                     the first free tick, decaying to 1 like s_slip: the load the grasp
-//                     could not feel (the object was held) arrives at release as a step,
-//                     faster than a slip is felt and answered, so the grip meets it raised;
-//   s_min_force       the least s for which every target force s (P_int q)_i +
-//                     (P_r f_m)_i is at least min_force: a normal load taken from a
-//                     finger is given back by squeezing harder;
-//   s_slip            raised at grip_rise_rate per second while any finger slips, and at
-//                     a slip onset at once to friction_margin times the grip at which
-//                     it slipped (that grip was just at the friction cone's edge, eq. 8);
-//                     it decays back to 1 with time constant grip_decay_time once the
-//                     slip stops (the grip falls back when the load goes);
-// capped at the largest s for which no target exceeds max_force. When a finger has
-// slipped with the cap binding for capacity_time (a slide the grip at its cap did not
-// stop), or min_force cannot be met, `beyond_capacity` is raised: the load exceeds what
-// the hand can hold with this friction. (A slip at the cap that stops sooner -- a pad
-// shearing as the released object settles -- is not reported as such.)
-// Slip: SlipDetector (contact_observers.hpp).
+//   s_release   Step::release_grip (the grasp's s_g, release_grip.hpp; 0: release_grip) on the
+//               first free tick, decaying to 1 like s_slip: the load the held object hid
+//               arrives at release as a step, faster than a slip is felt and answered;
+//   s_min_force the least s for which every target s (P_int q)_i + (P_r f_m)_i is at least
+//               min_force: a normal load taken from a finger is given back by squeezing;
+//   s_slip      raised at grip_rise_rate per second while any finger slips, and at a slip
+//               onset at once to friction_margin times the grip at which it slipped (that
+//               grip was at the friction cone's edge, eq. 8); back to 1 with time constant
+//               grip_decay_time once the slip stops (the grip falls when the load goes);
+// capped at the largest s for which no target exceeds max_force. `beyond_capacity` (the load
+// exceeds what the hand can hold with this friction) is raised when min_force cannot be met,
+// or when a finger has slipped with the cap binding for capacity_time and the slide is not
+// slowing down: its speed (SlipDetector's lead) at least capacity_slide_ratio times its peak
+// since the cap began to bind. A pad's shear as the released object settles is flagged as
+// slip too but slows down once the pad carries the load; a load beyond friction at the cap
+// keeps the object accelerating (docs/force_layer.md, "Said in time"). Slip: SlipDetector.
 #pragma once
 
 #include <algorithm>
@@ -149,7 +145,7 @@ class ForceLayer {
     motion_.reset();
     grip_slip_ = Scalar(1);
     was_slipping_ = was_free_ = false;
-    capped_slip_time_ = Scalar(0);
+    capped_slip_time_ = capped_slide_peak_ = Scalar(0);
   }
 
   const ForceVector& stiffness_estimate() const noexcept { return stiffness_.estimate(); }
@@ -181,8 +177,8 @@ class ForceLayer {
     stiffness_.update(
         {p.min_stiffness, p.max_stiffness, p.stiffness_window, p.min_excitation, p.min_fit},
         touching, motion_.advance(), *in.measured, dt);
-    const bool slipping = slip_.update(touching, motion_.steps(), *in.normals, in.object_free,
-                                       p.slip_distance, dt, out.slipping);
+    const typename SlipDetector<Scalar, Dim, NumFingers>::Report slip = slip_.update(
+        touching, motion_.steps(), *in.normals, in.object_free, p.slip_distance, dt, out.slipping);
 
     // Rigid / internal split of the touching fingers' normal-force space.
     map_.build(touching, *in.points, *in.normals, in.object_position, p.rigid_tolerance);
@@ -203,7 +199,7 @@ class ForceLayer {
       out.load.setZero();
       r_load_.setZero();
     }
-    const Scalar s = update_grip(in, slipping, out.status);
+    const Scalar s = update_grip(in, slip.any, slip.lead, out.status);
     out.grip = s;
 
     // Internal force error (the rigid part belongs to the pose loop) and the loops.
@@ -233,7 +229,9 @@ class ForceLayer {
 
  private:
   /// The grip scale s (file comment), from q_int_ and r_load_; raises the status flags.
-  Scalar update_grip(const Step& in, bool slipping, ForceLayerStatus& status) noexcept {
+  /// `lead`: the slide's speed (SlipDetector::Report::lead) for capacity_slide_ratio.
+  Scalar update_grip(const Step& in, bool slipping, Scalar lead,
+                     ForceLayerStatus& status) noexcept {
     const ForceLayerParams<Scalar>& p = params_;
     Scalar s_lo = Scalar(1), s_hi = std::numeric_limits<Scalar>::infinity();
     bool infeasible = false, over_max = false;
@@ -272,7 +270,10 @@ class ForceLayer {
       grip_slip_ = std::min(grip_slip_, s);  // no windup above the cap
     }
     capped_slip_time_ = capped_slip ? capped_slip_time_ + in.dt : Scalar(0);
-    if (capped_slip && capped_slip_time_ >= p.capacity_time) infeasible = true;
+    capped_slide_peak_ = capped_slip ? std::max(capped_slide_peak_, lead) : Scalar(0);
+    if (capped_slip && capped_slip_time_ >= p.capacity_time &&
+        lead >= p.capacity_slide_ratio * capped_slide_peak_)
+      infeasible = true;
     grip_ = s;
     if (s > Scalar(1) + Scalar(1e-6)) status |= ForceLayerStatus::grip_raised;
     if (infeasible) status |= ForceLayerStatus::beyond_capacity;
@@ -291,7 +292,8 @@ class ForceLayer {
   ContactMotion<Scalar, Dim, NumFingers> motion_{};
   ForceVector e_, q_int_, r_load_;  ///< per-tick scratch (preallocated)
   Scalar grip_ = Scalar(1), grip_slip_ = Scalar(1);
-  Scalar capped_slip_time_ = Scalar(0);  ///< s a finger has slipped with the cap binding
+  Scalar capped_slip_time_ = Scalar(0);   ///< s a finger has slipped with the cap binding
+  Scalar capped_slide_peak_ = Scalar(0);  ///< [m] the largest slide lead since then
   bool was_slipping_ = false, was_free_ = false;
 };
 

@@ -31,6 +31,10 @@ struct ForceLayerParams {
   Scalar rigid_tolerance = Scalar(0.1);        ///< eps, dimensionless (see the file comment)
   Scalar contact_damping = Scalar(10);         ///< c [N s/m], largest expected; 0: no gain cap
   Scalar capacity_time = Scalar(0.02);  ///< [s], slip at the grip's cap before beyond_capacity
+  /// in [0, 1]: beyond_capacity also needs the slide at the cap running at least this
+  /// fraction of its fastest since the cap began to bind (a settling pad's shear slows
+  /// down; force_layer.hpp). 0: any slide.
+  Scalar capacity_slide_ratio = Scalar(0.8);
   /// The hand's joint servo, every joint alike (joint_servo.hpp): position stiffness K
   /// [N m/rad] and velocity gain D [N m s/rad] with which it tracks the integral of the
   /// joint-velocity command. 0 (the default): not modelled, a rigid servo. With K > 0 the
@@ -68,6 +72,8 @@ struct ForceLayerParams {
         {"force_layer.rigid_tolerance", rigid_tolerance, Scalar(0), inf, true},
         {"force_layer.contact_damping", contact_damping, Scalar(0), inf, false},
         {"force_layer.capacity_time", capacity_time, Scalar(0), inf, false},
+        {"force_layer.capacity_slide_ratio", capacity_slide_ratio, Scalar(0),
+         Scalar(1) + Scalar(1e-12), false},
         {"force_layer.servo_stiffness", servo_stiffness, Scalar(0), inf, false},
         {"force_layer.servo_damping", servo_damping, Scalar(0), inf, false},
     };
