@@ -447,6 +447,46 @@ TEST(ForceLayer, LoadBeyondMaxForceIsReported) {
   EXPECT_LE(r.target.maxCoeff(), 6.0 + 1e-9);
 }
 
+/// min_force out of reach (here a min_force that the grip cannot give every finger within
+/// max_force: 5.5 N against the thumb's pattern of 3 capped at 6 N) is reported beyond
+/// capacity once it has lasted capacity_time, not on its first ticks: a release's step or a
+/// knock passes through it for a few ticks. With capacity_time 0 it is reported at once.
+TEST(ForceLayer, MinForceOutOfReachIsBeyondCapacityOnceItLastsCapacityTime) {
+  for (const double capacity_time : {0.02, 0.05, 0.0}) {
+    const int needed = static_cast<int>(std::lround(capacity_time / 1e-3));
+    for (const int episode : {needed - 5, needed + 5}) {
+      if (episode <= 0) continue;
+      SCOPED_TRACE(testing::Message() << "capacity_time " << capacity_time << ", " << episode);
+      Grasp g;
+      g.measured = g.pattern;
+      Layer layer;
+      inhand::ForceLayerParams<double> p = layer.params();
+      p.capacity_time = capacity_time;
+      layer.set_params(p);
+      Layer::Result r;
+      int first = -1, raised = 0;
+      for (int t = 0; t < 200; ++t) {
+        Layer::Step s = g.step();
+        if (t >= 50 && t < 50 + episode) s.min_force = 5.5;
+        layer.update(s, r);
+        if (inhand::has(r.status, inhand::ForceLayerStatus::beyond_capacity)) {
+          if (first < 0) first = t;
+          ++raised;
+        }
+      }
+      if (episode < needed) {
+        EXPECT_EQ(first, -1);
+      } else {
+        // From the tick on which it has lasted capacity_time (+-1 for the sum of dt) to
+        // the end of the episode, and not after.
+        EXPECT_GE(first, 50 + needed - 2);
+        EXPECT_LE(first, 50 + needed);
+        EXPECT_EQ(raised, 50 + episode - first);
+      }
+    }
+  }
+}
+
 /// A slide at the grip's cap that slows down (a pad's shear as a released object settles on
 /// it: the speed rises over 15 ms, then decays with 15 ms) is flagged as slip for longer
 /// than capacity_time but not reported beyond capacity; with capacity_slide_ratio 0 (any

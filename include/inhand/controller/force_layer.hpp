@@ -49,12 +49,13 @@
 //               grip was at the friction cone's edge, eq. 8); back to 1 with time constant
 //               grip_decay_time once the slip stops (the grip falls when the load goes);
 // capped at the largest s for which no target exceeds max_force. `beyond_capacity` (the load
-// exceeds what the hand can hold with this friction) is raised when min_force cannot be met,
-// or when a finger has slipped with the cap binding for capacity_time and the slide is not
-// slowing down: its speed (SlipDetector's lead) at least capacity_slide_ratio times its peak
-// since the cap began to bind. A pad's shear as the released object settles is flagged as
-// slip too but slows down once the pad carries the load; a load beyond friction at the cap
-// keeps the object accelerating (docs/force_layer.md, "Said in time"). Slip: SlipDetector.
+// exceeds what the hand can hold with this friction) is raised when min_force has been out of
+// reach for capacity_time (a release's step passes through it for a few ticks), or when a
+// finger has slipped with the cap binding for capacity_time and the slide is not slowing
+// down: its speed (SlipDetector's lead) at least capacity_slide_ratio times its peak since
+// the cap began to bind. A pad's shear as the released object settles is flagged as slip too
+// but slows down once the pad carries the load; a load beyond friction at the cap keeps the
+// object accelerating (docs/force_layer.md, "Said in time"). Slip: SlipDetector.
 #pragma once
 
 #include <algorithm>
@@ -82,11 +83,10 @@ class ForceLayer {
   using Wrench = typename Map::Wrench;  ///< (force; torque about p_o)
   using Vec = Vector<Scalar, Dim>;
 
-  /// Per-tick input: touching fingers' measured contact points, outward normals and
-  /// normal forces (columns / entries of the others are ignored), the planner's
-  /// pattern q, the object pose, the min/max force bounds of the planner, and whether
-  /// the object is free (manipulation; false while the grasp holds it fixed: every
-  /// direction is then internal and the grip stays at 1).
+  /// Per-tick input: touching fingers' measured contact points, outward normals and normal
+  /// forces (columns / entries of the others are ignored), the planner's pattern q, the
+  /// object pose, the planner's min/max force bounds, and whether the object is free (false
+  /// while the grasp holds it fixed: every direction is then internal, the grip stays 1).
   struct Step {
     const Mask* touching = nullptr;
     const Points* points = nullptr;
@@ -95,8 +95,7 @@ class ForceLayer {
     const ForceVector* pattern = nullptr;
     /// Fingertip steps at the contacts over the last tick [m], world: J (q - q_prev).
     const Points* tip_steps = nullptr;
-    /// Per finger, servo_normal_gain() at its contact [1/m^2] (joint_servo.hpp); null or 0:
-    /// the joint servo is not seen (as with ForceLayerParams::servo_stiffness 0).
+    /// Per finger, servo_normal_gain() at its contact [1/m^2] (joint_servo.hpp); 0, null: none
     const ForceVector* servo_gain = nullptr;
     Vec object_position = Vec::Zero();
     Rotation<Scalar, Dim> object_rotation = Rotation<Scalar, Dim>::Identity();
@@ -108,12 +107,11 @@ class ForceLayer {
   };
 
   struct Result {
-    ForceVector velocity;  ///< u_i [m/s] into the object along -n_i (0 when not touching)
-    ForceVector target;    ///< the force each loop drives to [N]
-    Mask slipping;         ///< per finger
-    Wrench load =
-        Wrench::Zero();       ///< external wrench the normal forces balance, -sum(-f n; r x -f n)
-    Scalar grip = Scalar(1);  ///< s
+    ForceVector velocity;          ///< u_i [m/s] into the object along -n_i (0 when not touching)
+    ForceVector target;            ///< the force each loop drives to [N]
+    Mask slipping;                 ///< per finger
+    Wrench load = Wrench::Zero();  ///< external wrench they balance, -sum(-f n; r x -f n)
+    Scalar grip = Scalar(1);       ///< s
     ForceLayerStatus status = ForceLayerStatus::ok;
   };
 
@@ -145,7 +143,7 @@ class ForceLayer {
     motion_.reset();
     grip_slip_ = Scalar(1);
     was_slipping_ = was_free_ = false;
-    capped_slip_time_ = capped_slide_peak_ = Scalar(0);
+    short_time_ = capped_slip_time_ = capped_slide_peak_ = Scalar(0);
   }
 
   const ForceVector& stiffness_estimate() const noexcept { return stiffness_.estimate(); }
@@ -228,13 +226,13 @@ class ForceLayer {
   }
 
  private:
-  /// The grip scale s (file comment), from q_int_ and r_load_; raises the status flags.
-  /// `lead`: the slide's speed (SlipDetector::Report::lead) for capacity_slide_ratio.
+  /// The grip scale s (file comment) from q_int_, r_load_ and the slide's speed `lead`
+  /// (SlipDetector::Report::lead, for capacity_slide_ratio); raises the status flags.
   Scalar update_grip(const Step& in, bool slipping, Scalar lead,
                      ForceLayerStatus& status) noexcept {
     const ForceLayerParams<Scalar>& p = params_;
     Scalar s_lo = Scalar(1), s_hi = std::numeric_limits<Scalar>::infinity();
-    bool infeasible = false, over_max = false;
+    bool short_of_min = false, over_max = false;  // short: min_force out of reach
     if (in.object_free) {
       const Scalar s_release = in.release_grip > Scalar(0) ? in.release_grip : p.release_grip;
       if (!was_free_) grip_slip_ = std::max(grip_slip_, s_release);
@@ -246,7 +244,7 @@ class ForceLayer {
           s_lo = std::max(s_lo, (in.min_force - r) / q);
           s_hi = std::min(s_hi, (in.max_force - r) / q);
         } else if (r < in.min_force) {
-          infeasible = true;
+          short_of_min = true;
         }
       }
       if (slipping) {
@@ -266,14 +264,15 @@ class ForceLayer {
     if (s > s_hi) {
       s = std::max(Scalar(1), s_hi);
       capped_slip = slipping;
-      if (s_lo > s_hi) infeasible = true;
+      short_of_min = short_of_min || s_lo > s_hi;
       grip_slip_ = std::min(grip_slip_, s);  // no windup above the cap
     }
+    short_time_ = short_of_min ? short_time_ + in.dt : Scalar(0);
     capped_slip_time_ = capped_slip ? capped_slip_time_ + in.dt : Scalar(0);
     capped_slide_peak_ = capped_slip ? std::max(capped_slide_peak_, lead) : Scalar(0);
-    if (capped_slip && capped_slip_time_ >= p.capacity_time &&
-        lead >= p.capacity_slide_ratio * capped_slide_peak_)
-      infeasible = true;
+    const bool infeasible = (short_of_min && short_time_ >= p.capacity_time) ||
+                            (capped_slip && capped_slip_time_ >= p.capacity_time &&
+                             lead >= p.capacity_slide_ratio * capped_slide_peak_);
     grip_ = s;
     if (s > Scalar(1) + Scalar(1e-6)) status |= ForceLayerStatus::grip_raised;
     if (infeasible) status |= ForceLayerStatus::beyond_capacity;
@@ -292,6 +291,7 @@ class ForceLayer {
   ContactMotion<Scalar, Dim, NumFingers> motion_{};
   ForceVector e_, q_int_, r_load_;  ///< per-tick scratch (preallocated)
   Scalar grip_ = Scalar(1), grip_slip_ = Scalar(1);
+  Scalar short_time_ = Scalar(0);         ///< s min_force has been out of reach
   Scalar capped_slip_time_ = Scalar(0);   ///< s a finger has slipped with the cap binding
   Scalar capped_slide_peak_ = Scalar(0);  ///< [m] the largest slide lead since then
   bool was_slipping_ = false, was_free_ = false;
