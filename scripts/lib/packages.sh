@@ -35,6 +35,8 @@ INHAND_PACKAGES=(
   # the URDF reader (inhand::urdf) and its tests (tests/urdf: KDL reading the same files)
   liburdfdom-dev
   libkdl-parser-dev
+  # scripts/variants and scripts/gen_paper_scenarios.py, and the tests that run them
+  python3
   # robustness stages of scripts/test and scripts/fuzz: memcheck, clang + libFuzzer
   valgrind
   clang-14
