@@ -13,7 +13,8 @@ gravity). Everything else, the expectations included, is the file's. The control
 the plant's gravity as for any scenario file (docs/scenarios.md). Written to DIR (default
 out/variants): files/<variant>.json, summaries/<variant>.json and variants.csv (one row per
 variant: name, source file, mass, friction, gravity, passed, first violation). Exit status: 0;
-with --check, 1 when a variant fails; 2 on a usage error or a file that cannot be read.
+with --check, 1 when a variant fails; 2 on a usage error, a file that cannot be read, or a
+variant that inhand_scenario refuses or cannot run (its status 2 or 3, printed as ERROR).
 """
 import argparse
 import concurrent.futures
