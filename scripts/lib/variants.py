@@ -117,7 +117,8 @@ def main():
     p.add_argument("--frictions", default="0.4,0.7,1.0",
                    type=lambda t: numbers(t, "--frictions"), help="(default 0.4,0.7,1.0)")
     p.add_argument("--gravity", default="+X,-X,+Y,-Y,+Z,-Z", type=gravity_list,
-                   help="world axes gravity pulls along, analytic plant (default all six)")
+                   help="world axes gravity pulls along, analytic plant (default all six; a list that "
+                        "starts with - is given as --gravity=-Z,+Y)")
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     p.add_argument("--out", default="out/variants")
     p.add_argument("--check", action="store_true", help="exit 1 when a variant fails")
