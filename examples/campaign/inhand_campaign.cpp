@@ -13,7 +13,11 @@
 // the object may be lost -- release_grip_capped, beyond_capacity, workspace_limited -- came
 // first, how long before the first contact opened), a summary table, how many failures were
 // so warned and how many successes raised the same warnings; exit code 1 when the success
-// rate is below --min-success. `--first-seed S --count 1 --trace F.csv`
+// rate is below --min-success. Each case's task is also checked for reach from the hand's
+// kinematics alone (campaign_reach.hpp): a task whose path some touching fingertip cannot
+// follow within its joints' limits is said to be beyond the hand's reach (in its line, and
+// counted among failures and successes; the success rate counts every case as drawn).
+// `--first-seed S --count 1 --trace F.csv`
 // writes case S's per-tick trace (the columns of inhand_scenario's trace.csv), to see
 // why a seed fails.
 #include <CLI/CLI.hpp>
@@ -25,6 +29,7 @@
 #include <vector>
 
 #include "campaign/campaign_cases.hpp"
+#include "campaign/campaign_reach.hpp"
 #include "common/trace_csv.hpp"
 #include "inhand/sim/scenario.hpp"
 
@@ -62,6 +67,8 @@ struct Outcome {
   Outcome() {
     for (double& t : warned_time) t = std::numeric_limits<double>::quiet_NaN();
   }
+  /// The task's reach (campaign_reach.hpp), checked at its first tick; finger -1: not run.
+  inhand::examples::campaign::ReachMiss reach;
   /// Whether kForetelling[k] was raised on a tick before the first contact opened.
   bool warned_before_loss(int k) const { return warned_time[k] < loss_time; }  // NaN: false
 };
@@ -89,6 +96,58 @@ class LossWatch {
   std::vector<char> touching_;
 };
 
+/// Checks the task's reach (campaign_reach.hpp) on the task stage's first tick, from the
+/// plant's joint angles and fingertips there and the pose the task starts from (the
+/// desired pose of the stage before's last tick); the touching fingers only.
+class ReachWatch {
+ public:
+  ReachWatch(const Case& c, Outcome& o) : c_(c), o_(o) {}
+  void tick(const ip::TickRecord& rec) {
+    const int task = static_cast<int>(c_.spec.stages.size()) - 1;
+    if (rec.stage < task) {
+      start_ = *rec.desired;
+      return;
+    }
+    if (done_ || rec.stage != task) return;
+    done_ = true;
+    const ip::HandPlant& plant = *rec.plant;
+    std::vector<const ip::PlantFinger*> chains;
+    std::vector<ip::PlantFinger::JointVector> q;
+    std::vector<Eigen::Vector3d> tips;
+    for (int i = 0; i < plant.finger_count(); ++i) {
+      if (!plant.contact(i).active) continue;
+      fingers_.push_back(i);
+      chains.push_back(&plant.finger(i));
+      q.push_back(plant.joint_positions(i));
+      tips.push_back(plant.fingertip_pose(i).position);
+    }
+    o_.reach = inhand::examples::campaign::task_reach(chains, q, tips, start_,
+                                                      c_.spec.stages.back().segments);
+    if (o_.reach.finger >= 0) o_.reach.finger = fingers_[static_cast<std::size_t>(o_.reach.finger)];
+  }
+
+ private:
+  const Case& c_;
+  Outcome& o_;
+  inhand::Pose<double, 3> start_{};
+  bool done_ = false;
+  std::vector<int> fingers_;
+};
+
+/// m: a task whose reach check misses by more is reported beyond the hand's reach. A tenth
+/// of the campaign's RMS position bound: a shorter miss cannot fail a bound by itself; the
+/// check's IK meets a reachable target to 1e-6 m (tests/sim/campaign_reach_test.cpp).
+constexpr double kReachTolerance = 1e-4;
+
+/// "; beyond reach: <finger> <mm> mm short at <t> s into the task".
+std::string beyond_reach(const Case& c, const inhand::examples::campaign::ReachMiss& m) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "; beyond reach: %s %.2f mm short at %.2f s into the task",
+                c.spec.hand.finger_names[static_cast<std::size_t>(m.finger)].c_str(),
+                1e3 * m.distance, m.at);
+  return buf;
+}
+
 /// "<flag> <ms> ms before the first contact opened" for the earliest warning raised before
 /// that tick, or why there is none.
 std::string foretold(const Outcome& o) {
@@ -108,15 +167,20 @@ std::string foretold(const Outcome& o) {
 Outcome evaluate(const Case& c, const std::string& trace = {}) {
   Outcome o;
   LossWatch watch(o);
+  ReachWatch reach(c, o);
   ip::ScenarioResult r;
   try {
     if (trace.empty()) {
-      r = ip::ScenarioRunner{}.run(c.spec, [&](const ip::TickRecord& rec) { watch.tick(rec); });
+      r = ip::ScenarioRunner{}.run(c.spec, [&](const ip::TickRecord& rec) {
+        watch.tick(rec);
+        reach.tick(rec);
+      });
     } else {
       ex::TraceCsvWriter<3> writer(trace, c.spec.hand.finger_names, c.spec.object.pose.rotation);
       ex::TraceRow<3> row;
       r = ip::ScenarioRunner{}.run(c.spec, [&](const ip::TickRecord& rec) {
         watch.tick(rec);
+        reach.tick(rec);
         ex::fill_trace_row<3>(rec, c.spec.stages[static_cast<std::size_t>(rec.stage)].name, row);
         writer.write(row);
       });
@@ -219,6 +283,7 @@ int main(int argc, char** argv) {
   long opened = 0, warned = 0;  // failures in which a contact opened; of them, warned before
   long warned_by[kForetold] = {};
   long raised_in_success[kForetold] = {};  // successes that raised the flag at some tick
+  long reach_failed = 0, reach_ok = 0;     // cases whose task is beyond reach (kReachTolerance)
   for (long k = 0; k < count; ++k) {
     const std::uint64_t seed = first + static_cast<std::uint64_t>(k);
     Case c = make_case(seed, wide,
@@ -251,11 +316,14 @@ int main(int argc, char** argv) {
         warned += any ? 1 : 0;
       }
     }
+    const bool out_of_reach = o.reach.finger >= 0 && o.reach.distance > kReachTolerance;
+    if (out_of_reach) ++(o.success ? reach_ok : reach_failed);
     if (verbose || !o.success)
-      std::printf("seed %6llu %-4s %-70s rms %.3fmm/%.4frad final %.3fmm/%.4frad %s%s%s\n",
+      std::printf("seed %6llu %-4s %-70s rms %.3fmm/%.4frad final %.3fmm/%.4frad %s%s%s%s\n",
                   static_cast<unsigned long long>(seed), o.success ? "ok" : "FAIL",
                   c.description.c_str(), 1e3 * o.rms_p, o.rms_r, 1e3 * o.fin_p, o.fin_r,
-                  o.why.c_str(), o.success ? "" : "; ", o.success ? "" : foretold(o).c_str());
+                  o.why.c_str(), o.success ? "" : "; ", o.success ? "" : foretold(o).c_str(),
+                  out_of_reach ? beyond_reach(c, o.reach).c_str() : "");
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -277,5 +345,10 @@ int main(int argc, char** argv) {
   for (int k = 0; k < kForetold; ++k)
     std::printf("%s%s %ld", k ? ", " : "", kForetelling[k].name, raised_in_success[k]);
   std::printf("\n");
+  std::printf(
+      "tasks beyond the hand's reach (a fingertip held more than %.1f mm from the task's "
+      "path by its joints' limits, checked at the task's start): %ld of the failures, %ld "
+      "of the successes\n",
+      1e3 * kReachTolerance, reach_failed, reach_ok);
   return rate >= min_success ? 0 : 1;
 }
