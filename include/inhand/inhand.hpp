@@ -14,6 +14,7 @@
 #include "inhand/math/damped_least_squares.hpp"
 #include "inhand/kinematics/contact_kinematics.hpp"
 #include "inhand/kinematics/finger_chain.hpp"
+#include "inhand/kinematics/finger_lanes.hpp"
 #include "inhand/controller/ik.hpp"
 #include "inhand/controller/servo.hpp"
 #include "inhand/controller/trajectory.hpp"

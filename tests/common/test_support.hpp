@@ -31,6 +31,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <random>
 #include <sstream>
@@ -350,6 +351,19 @@ template <typename Chain>
 inhand::Vector<typename Chain::Scalar, Chain::Dim> random_fingertip_offset(const Chain& chain,
                                                                            Rng& rng) {
   return chain.fingertip_radius * random_unit_vector<typename Chain::Scalar, Chain::Dim>(rng);
+}
+
+/// Whether two forward-kinematics workspaces hold the same bits.
+template <typename Chain>
+bool same_bits(const inhand::FingerKinematics<Chain>& a, const inhand::FingerKinematics<Chain>& b) {
+  auto same = [](const auto& x, const auto& y) {
+    return x.size() == y.size() &&
+           std::memcmp(x.data(), y.data(),
+                       sizeof(typename Chain::Scalar) * static_cast<std::size_t>(x.size())) == 0;
+  };
+  return same(a.joint_origins, b.joint_origins) && same(a.joint_axes, b.joint_axes) &&
+         same(a.fingertip.position, b.fingertip.position) &&
+         same(a.fingertip.rotation, b.fingertip.rotation);
 }
 
 // ---------------------------------------------------------------------------

@@ -16,24 +16,12 @@
 namespace {
 
 using inhand_test::make_rng;
+using inhand_test::same_bits;
 using inhand_test::scaled;
 
 template <typename Chain>
 class ChainPlanTest : public ::testing::Test {};
 TYPED_TEST_SUITE(ChainPlanTest, inhand_test::AllFingerChains, inhand_test::ChainNames);
-
-/// Whether two workspaces hold the same bits.
-template <typename Chain>
-bool same_bits(const inhand::FingerKinematics<Chain>& a, const inhand::FingerKinematics<Chain>& b) {
-  auto same = [](const auto& x, const auto& y) {
-    return x.size() == y.size() &&
-           std::memcmp(x.data(), y.data(),
-                       sizeof(typename Chain::Scalar) * static_cast<std::size_t>(x.size())) == 0;
-  };
-  return same(a.joint_origins, b.joint_origins) && same(a.joint_axes, b.joint_axes) &&
-         same(a.fingertip.position, b.fingertip.position) &&
-         same(a.fingertip.rotation, b.fingertip.rotation);
-}
 
 /// The chain with joint i's frame turned when (mask >> i) & 1, its axis general when
 /// (mask >> (i + 8)) & 1 (spatial only: planar axes are +-z), and the tip frame turned

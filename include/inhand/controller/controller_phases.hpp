@@ -52,6 +52,7 @@ ControllerStatus grasp_phase(const TickInput<Types>& t, ControllerState<Types>& 
   using Scalar = typename Types::ScalarType;
   const GraspParams<Scalar>& g = t.config.grasp;
   ControllerWarning w = out.warnings;
+  detail::hand_kinematics(t, sc);
   w |= detail::size_grip_on_measured_normals(t.config, t.in, st, sc);
   detail::balance_grasp(t.config, t.in, st, sc);
   // A placed finger presses with its grasp force f_g, a finger not yet placed slides to
@@ -148,6 +149,7 @@ ControllerStatus manipulation_phase(
   using Vec = typename Types::Vec;
   ControllerWarning w = out.warnings;
   const int n = static_cast<int>(st.fingers.size());
+  detail::hand_kinematics(t, sc);
   // Layer 1: desired pose, commanded twist.
   st.manipulation_time += t.dt;
   const TrajectorySample<Scalar, Types::kDim> sample = trajectory.evaluate(st.manipulation_time);

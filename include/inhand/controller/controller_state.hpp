@@ -4,8 +4,8 @@
 // if the tick produces a non-finite value (reactive_controller.hpp), so it holds only
 // what a tick reads from an earlier one; the scratch (forward kinematics, the IK and
 // its workspace) is rewritten every tick before it is read, except what configure()
-// derives from the chains once (each chain's plan, layer 3's limits and couplings). Units as in
-// controller_io.hpp.
+// derives from the chains once (chain plans, the hand's lanes, layer 3's limits and
+// couplings). Units as in controller_io.hpp.
 #pragma once
 
 #include "inhand/controller/controller_io.hpp"
@@ -13,6 +13,7 @@
 #include "inhand/controller/force_layer.hpp"
 #include "inhand/controller/force_planner.hpp"
 #include "inhand/controller/grasp.hpp"
+#include "inhand/controller/hand_kinematics.hpp"
 #include "inhand/controller/pose_feedback.hpp"
 #include "inhand/controller/sensor_gates.hpp"
 #include "inhand/math/whole_copy.hpp"
@@ -183,8 +184,8 @@ struct TickScratch {
   typename Planner::Normals tip_steps{};       ///< m, fingertip step at the contact this tick
   typename Planner::ForceVector servo_gain{};  ///< 1/m^2, servo_normal_gain() per finger
   typename Forces::Result forces{};
-  /// Sizes and configures every part for the configuration (allocates only for
-  /// run-time sizes).
+  HandLanes<Types> lanes{};  ///< built by size_for
+  /// Sizes and configures every part for the configuration (allocates only for run-time sizes).
   void size_for(const typename Types::Config& c) {
     const int n = static_cast<int>(c.fingers.size());
     if constexpr (Types::kNumFingers == Dynamic) fingers.resize(static_cast<std::size_t>(n));
@@ -196,6 +197,9 @@ struct TickScratch {
       w.plan = ChainPlan<typename Types::Chain>(fc.chain);
       w.layer3.configure(fc.chain, c.ik);
     }
+    lanes.build(c, [&](int i) -> const ChainPlan<typename Types::Chain>& {
+      return fingers[static_cast<std::size_t>(i)].plan;
+    });
     touching = Planner::Mask::Zero(n);
     normals = Planner::Normals::Zero(Types::kDim, n);
     points = Planner::Normals::Zero(Types::kDim, n);

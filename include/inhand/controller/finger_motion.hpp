@@ -39,6 +39,12 @@ class FingerPoints {
       : config_(config), input_(input), kin_(kin) {
     if (chain()) forward_kinematics(config.chain, plan, input.joint_positions, kin);
   }
+  /// Chain fingers: `kin` already holds forward kinematics at the measured joint
+  /// positions (the controller's tick runs them for the whole hand first,
+  /// hand_kinematics.hpp).
+  FingerPoints(const typename Types::FingerConfig& config, const typename Types::FingerInput& input,
+               const Kinematics& kin) noexcept
+      : config_(config), input_(input), kin_(kin) {}
 
   /// Chain fingers touching: whether the measured contact is implausible for the
   /// fingertip sphere (ControllerConfig::contact_tolerance). External: never.
@@ -74,7 +80,7 @@ class FingerPoints {
   bool chain() const noexcept { return config_.kinematics == KinematicsSource::chain; }
   const typename Types::FingerConfig& config_;
   const typename Types::FingerInput& input_;
-  Kinematics& kin_;
+  const Kinematics& kin_;
 };
 
 }  // namespace inhand

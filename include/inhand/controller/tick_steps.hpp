@@ -100,13 +100,28 @@ ControllerWarning command_finger(const TickInput<Types>& t, int i,
   return w;
 }
 
-/// Finger i's kinematics this tick; its contact's plausibility flagged in fo and w.
+/// Forward kinematics of every chain finger at this tick's joint positions, into each
+/// finger's sc.fingers[i].kinematics (hand_kinematics.hpp: the fingers of one design side
+/// by side). First in each phase: every finger's points below read it.
+template <typename Types>
+void hand_kinematics(const TickInput<Types>& t, TickScratch<Types>& sc) noexcept {
+  sc.lanes.run(
+      t.config, t.in,
+      [&](int i) -> const ChainPlan<typename Types::Chain>& {
+        return sc.fingers[static_cast<std::size_t>(i)].plan;
+      },
+      [&](int i) -> FingerKinematics<typename Types::Chain>& {
+        return sc.fingers[static_cast<std::size_t>(i)].kinematics;
+      });
+}
+
+/// Finger i's kinematics this tick (hand_kinematics() has run); its contact's plausibility
+/// flagged in fo and w.
 template <typename Types>
 FingerPoints<Types> finger_points(const TickInput<Types>& t, int i, TickScratch<Types>& sc,
                                   typename Types::FingerOutput& fo, ControllerWarning& w) noexcept {
   const auto k = static_cast<std::size_t>(i);
-  const FingerPoints<Types> points(t.config.fingers[k], sc.fingers[k].plan, t.in.fingers[k],
-                                   sc.fingers[k].kinematics);
+  const FingerPoints<Types> points(t.config.fingers[k], t.in.fingers[k], sc.fingers[k].kinematics);
   fo.implausible_contact = points.implausible_contact(t.config.contact_tolerance);
   if (fo.implausible_contact) w |= ControllerWarning::implausible_contact;
   return points;

@@ -42,9 +42,10 @@
 // (PoseLoop::hold_integral_along): the integral owns that direction only while the twist
 // can follow it. Fingers that
 // do not touch are not considered. Cost when no joint is within kHeldJointTolerance of a
-// held bound: a few comparisons per joint; else forward kinematics, the contact Jacobian
-// and a Dim x Dim symmetric eigenproblem per held joint (one more, and at most
-// C(h, 1) + ... + C(h, Dim) solves of size <= Dim for the cone, with h >= 2 joints held).
+// held bound: a few comparisons per joint; else the contact Jacobian (from the tick's
+// forward kinematics, tick_steps.hpp hand_kinematics) and a Dim x Dim symmetric eigenproblem per
+// held joint (one more, and at most C(h, 1) + ... + C(h, Dim) solves of size <= Dim for the cone,
+// with h >= 2 joints held).
 //
 // noexcept, no allocation (fixed or bounded DOF).
 #pragma once
@@ -80,8 +81,7 @@ bool keep_twist_in_reach(const Tick& tick, State& state, Scratch& scratch,
       const typename Types::FingerInput& f = tick.in.fingers[i];
       auto& servo = scratch.fingers[i].layer3;
       if (!f.contact.touching || !servo.at_position_limit(f.joint_positions, tol)) continue;
-      const FingerPoints<Types> points(tick.config.fingers[i], scratch.fingers[i].plan, f,
-                                       scratch.fingers[i].kinematics);
+      const FingerPoints<Types> points(tick.config.fingers[i], f, scratch.fingers[i].kinematics);
       typename Types::Jacobian& J = state.fingers[i].jacobian;
       points.jacobian(f.contact.contact_point, J);
       const Vec n = f.contact.normal.normalized();

@@ -40,6 +40,34 @@ inline void turn_about_coordinate_axis(Rotation<Scalar, 3>& R, int k, Scalar c, 
   }
 }
 
+/// R t in space, each row summed as (R(r,0) t0 + R(r,1) t1) + R(r,2) t2: one order in every
+/// build (Eigen's product sums the rows of a 3 x 3 by vector in an order that depends on
+/// its vectorisation), which ChainLanes (finger_lanes.hpp) follows lane by lane.
+template <typename Scalar>
+inline Vector<Scalar, 3> rotate(const Rotation<Scalar, 3>& R, const Vector<Scalar, 3>& t) noexcept {
+  Vector<Scalar, 3> out;
+  for (int r = 0; r < 3; ++r) out(r) = R(r, 0) * t(0) + R(r, 1) * t(1) + R(r, 2) * t(2);
+  return out;
+}
+/// R F in space, each entry summed in the order of rotate().
+template <typename Scalar>
+inline Rotation<Scalar, 3> rotate(const Rotation<Scalar, 3>& R,
+                                  const Rotation<Scalar, 3>& F) noexcept {
+  Rotation<Scalar, 3> out;
+  for (int k = 0; k < 3; ++k) out.col(k) = rotate<Scalar>(R, Vector<Scalar, 3>(F.col(k)));
+  return out;
+}
+/// The planar products (Eigen's; planar chains are not laned).
+template <typename Scalar>
+inline Vector<Scalar, 2> rotate(const Rotation<Scalar, 2>& R, const Vector<Scalar, 2>& t) noexcept {
+  return R * t;
+}
+template <typename Scalar>
+inline Rotation<Scalar, 2> rotate(const Rotation<Scalar, 2>& R,
+                                  const Rotation<Scalar, 2>& F) noexcept {
+  return R * F;
+}
+
 /// One joint in space given s = sin q and c = cos q: writes the joint's world axis
 /// R * axis and turns R into R * Rot(axis, q). Real fingers mostly turn about a
 /// coordinate axis of their joint frame (k >= 0: axis = sign e_k, as coordinate_axis()
@@ -125,14 +153,14 @@ inline void walk_chain(const Chain& chain, const Facts& facts, FingerKinematics<
   Vector<Scalar, Dim> p = chain.base.position;
   for (int i = 0; i < chain.dof(); ++i) {
     const auto& j = chain.joints[i];
-    p += R * j.parent_to_joint.position;
-    if (facts.frame_turns(i)) R = R * j.parent_to_joint.rotation;
+    p += rotate<Scalar>(R, j.parent_to_joint.position);
+    if (facts.frame_turns(i)) R = rotate<Scalar>(R, j.parent_to_joint.rotation);
     ws.joint_origins.col(i) = p;
     turn(R, i, ws.joint_axes.col(i));
   }
-  ws.fingertip.position = p + R * chain.joint_to_tip.position;
+  ws.fingertip.position = p + rotate<Scalar>(R, chain.joint_to_tip.position);
   if (facts.tip_turns()) {
-    ws.fingertip.rotation = R * chain.joint_to_tip.rotation;
+    ws.fingertip.rotation = rotate<Scalar>(R, chain.joint_to_tip.rotation);
   } else {
     ws.fingertip.rotation = R;
   }
