@@ -9,8 +9,8 @@
 // controller runs it (`each`), against the same four evaluated side by side in the lanes
 // of Eigen arrays (`lanes`: one array of 4 doubles per coordinate, each joint's step
 // applied to all four fingers at once: kinematics/finger_lanes.hpp, what the controller
-// runs for such fingers). The fixture checks at set-up that both give the same values,
-// bitwise.
+// runs for such fingers). The fixture checks at set-up that both give the same values
+// (bitwise without fused multiply-adds; within 1e-14 with them).
 #include "bench_support.hpp"
 
 namespace inhand_bench {
@@ -93,7 +93,8 @@ class FingersFixture {
         throw std::runtime_error("the fingers do not share one plan");
     }
     lanes_ = inhand::ChainLanes<Chain>(chains, kFingers, plans_[0]);
-    // Both forms give the same values, bitwise (no contracted multiply-adds).
+    // Both forms give the same values: bitwise without fused multiply-adds, to rounding with
+    // them (-march=native).
     Ws each[kFingers];
     for (int f = 0; f < kFingers; ++f) {
       inhand::forward_kinematics(chains_[f], plans_[f], q_[f][0], ws_[f]);
@@ -102,10 +103,13 @@ class FingersFixture {
     tick();
     next_ = 0;
     for (int f = 0; f < kFingers; ++f)
-      if (kLanes && (each[f].joint_origins != ws_[f].joint_origins ||
-                     each[f].joint_axes != ws_[f].joint_axes ||
-                     each[f].fingertip.position != ws_[f].fingertip.position ||
-                     each[f].fingertip.rotation != ws_[f].fingertip.rotation))
+      if (kLanes &&
+          !((each[f].joint_origins - ws_[f].joint_origins).cwiseAbs().maxCoeff() <= 1e-14 &&
+            (each[f].joint_axes - ws_[f].joint_axes).cwiseAbs().maxCoeff() <= 1e-14 &&
+            (each[f].fingertip.position - ws_[f].fingertip.position).cwiseAbs().maxCoeff() <=
+                1e-14 &&
+            (each[f].fingertip.rotation - ws_[f].fingertip.rotation).cwiseAbs().maxCoeff() <=
+                1e-14))
         throw std::runtime_error("lanes and each differ");
   }
 

@@ -4,10 +4,13 @@
 // HandLanes is derived from the configuration once (configure()): the fingers whose
 // kinematics come from their chain are grouped, in finger order, with the later fingers
 // whose chain plan they share (lanes_share_plan), up to kFingerLanes a group. A group of
-// kMinLaneGroup or more runs as one ChainLanes; every other chain finger runs
-// forward_kinematics(chain, plan, q, ws) alone. Two fingers in four lanes do the work of
-// four (docs/benchmarks.md, "SIMD lanes across fingers"), hence three at least. Fingers
-// with KinematicsSource::external are not evaluated. Either way each finger's workspace
+// kMinLaneGroup<Scalar> or more runs as one ChainLanes; every other chain finger runs
+// forward_kinematics(chain, plan, q, ws) alone. A ChainLanes costs the work of four fingers
+// whatever it holds: three fingers pay when a lane's four values fit one vector register of
+// the build (float with SSE2 or NEON, double with AVX), four otherwise (double with SSE2:
+// three Shadow-like fingers in lanes executed 1 % more instructions a tick than alone, four
+// 2 % fewer; docs/benchmarks.md, "SIMD lanes across fingers"). Fingers with
+// KinematicsSource::external are not evaluated. Either way each finger's workspace
 // holds what forward_kinematics() writes (finger_lanes.hpp says to which rounding).
 // run() is noexcept and allocation-free; building allocates only for run-time sizes.
 #pragma once
@@ -20,18 +23,22 @@
 
 namespace inhand {
 
-/// The fewest fingers evaluated as one ChainLanes.
-inline constexpr int kMinLaneGroup = 3;
+/// The fewest fingers evaluated as one ChainLanes (the file comment): 3 when a lane of
+/// kFingerLanes Scalars fits the widest vector register Eigen aligns for, else kFingerLanes.
+template <typename Scalar>
+inline constexpr int kMinLaneGroup =
+    static_cast<int>(kFingerLanes * sizeof(Scalar)) <= EIGEN_MAX_STATIC_ALIGN_BYTES ? 3
+                                                                                    : kFingerLanes;
 
 template <typename Types>
 class HandLanes {
  public:
   using Chain = typename Types::Chain;
   static constexpr int kNumFingers = Types::kNumFingers;
-  /// At most one group per kMinLaneGroup fingers.
+  static constexpr int kMinGroup = kMinLaneGroup<typename Types::ScalarType>;
+  /// At most one group per kMinGroup fingers.
   static constexpr int kMaxGroups =
-      kNumFingers == Dynamic ? Dynamic
-                             : (kNumFingers >= kMinLaneGroup ? kNumFingers / kMinLaneGroup : 1);
+      kNumFingers == Dynamic ? Dynamic : (kNumFingers >= kMinGroup ? kNumFingers / kMinGroup : 1);
 
   /// Groups the chain fingers of `config`; plan(i) gives finger i's ChainPlan. Allocates
   /// only for run-time sizes.
@@ -53,7 +60,7 @@ class HandLanes {
         for (int j = i + 1; j < n && count < kFingerLanes; ++j)
           if (!laned_[idx(j)] && chain_finger(config, j) && lanes_share_plan(plan(i), plan(j)))
             members[count++] = j;
-        if (count < kMinLaneGroup) continue;
+        if (count < kMinGroup) continue;
         const Chain* chains[kFingerLanes];
         for (int l = 0; l < count; ++l) {
           chains[l] = &config.fingers[idx(members[l])].chain;

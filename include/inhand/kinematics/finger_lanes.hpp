@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <type_traits>
 
 #include "inhand/kinematics/finger_chain.hpp"
@@ -110,7 +111,7 @@ class ChainLanes {
                           FingerKinematics<Chain>* const* ws) const noexcept {
     // Every lane's angles first, joint-major, then their sines and cosines at once: the
     // scalar stores of the gather are done before the vector loads read them.
-    constexpr int kAngles = kFingerLanes * kMaxLaneDof<Chain>;
+    constexpr std::size_t kAngles = static_cast<std::size_t>(kFingerLanes * kMaxLaneDof<Chain>);
     alignas(64) Scalar q_all[kAngles], sin_all[kAngles], cos_all[kAngles];
     const int n = dof();
     for (int l = 0; l < kFingerLanes; ++l) {
