@@ -31,14 +31,6 @@ class FingerPoints {
   using Vec = typename Types::Vec;
   using Kinematics = FingerKinematics<typename Types::Chain>;
 
-  /// Chain fingers: runs forward kinematics at the measured joint positions into `kin`,
-  /// with `plan`, the plan of config.chain (kinematics/chain_plan.hpp).
-  FingerPoints(const typename Types::FingerConfig& config,
-               const ChainPlan<typename Types::Chain>& plan,
-               const typename Types::FingerInput& input, Kinematics& kin) noexcept
-      : config_(config), input_(input), kin_(kin) {
-    if (chain()) forward_kinematics(config.chain, plan, input.joint_positions, kin);
-  }
   /// Chain fingers: `kin` already holds forward kinematics at the measured joint
   /// positions (the controller's tick runs them for the whole hand first,
   /// hand_kinematics.hpp).
