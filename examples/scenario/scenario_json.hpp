@@ -282,6 +282,7 @@ inline plant::HandController::Config read_controller(ObjectReader r, bool& gravi
     fl.grip_decay_time =
         f.number("grip_decay_time", fl.grip_decay_time, Range::positive_up_to(1e6));
     fl.release_grip = f.number("release_grip", fl.release_grip, Range::closed(1.0, 100.0));
+    fl.hold_release_grip = f.boolean("hold_release_grip", fl.hold_release_grip);
     fl.release_load = f.number("release_load", fl.release_load, Range::closed(0.0, 1000.0));
     fl.rigid_tolerance =
         f.number("rigid_tolerance", fl.rigid_tolerance, Range::positive_up_to(1.0));

@@ -72,6 +72,6 @@ int main() {
               in.fingers[1].contact.normal_force, in.fingers[2].contact.normal_force);
   ok = ok && hand.phase() == Hand::Phase::manipulating && error < 1e-4;
   // The thumb balances two fingers of 1 N each, times the grip (raised at release and
-  // decaying back to 1, force_layer.hpp).
+  // held while the object is free, force_layer.hpp).
   return ok && std::abs(thumb - 2.0 * out.grip) < 0.05 * out.grip ? 0 : 1;
 }

@@ -377,16 +377,41 @@ TEST(ForceLayer, SqueezeOffTheEquatorIsStillASqueeze) {
   for (int i = 0; i < 4; ++i) EXPECT_GT(r.velocity(i), 0.0) << i;
 }
 
-TEST(ForceLayer, GripStartsAtReleaseGripAndDecays) {
+TEST(ForceLayer, GripHoldsTheReleaseGripWhileFree) {
   Grasp g;
   Layer layer;
   Layer::Result r;
   // Held (the grasp): the grip is the pattern's.
   for (int t = 0; t < 100; ++t) layer.update(g.step(1e-3, false), r);
   EXPECT_EQ(r.grip, 1.0);
+  // Released: release_grip at once, and still after grip_decay_time and three times it (the
+  // load it is sized for, the weight, stays while the object is held).
+  const inhand::ForceLayerParams<double>& p = layer.params();
+  ASSERT_TRUE(p.hold_release_grip);
+  layer.update(g.step(1e-3, true), r);
+  EXPECT_EQ(r.grip, p.release_grip);
+  EXPECT_TRUE(inhand::has(r.status, inhand::ForceLayerStatus::grip_raised));
+  const int ticks = static_cast<int>(3.0 * p.grip_decay_time / 1e-3);
+  for (int t = 0; t < ticks; ++t) layer.update(g.step(1e-3, true), r);
+  EXPECT_EQ(r.grip, p.release_grip);
+  // Held again: the nominal grip; released again: the release grip again.
+  layer.update(g.step(1e-3, false), r);
+  EXPECT_EQ(r.grip, 1.0);
+  layer.update(g.step(1e-3, true), r);
+  EXPECT_EQ(r.grip, p.release_grip);
+}
+
+TEST(ForceLayer, GripAtReleaseDecaysWhenNotHeld) {
+  Grasp g;
+  Layer layer;
+  inhand::ForceLayerParams<double> p;
+  p.hold_release_grip = false;
+  layer.set_params(p);
+  Layer::Result r;
+  for (int t = 0; t < 100; ++t) layer.update(g.step(1e-3, false), r);
+  EXPECT_EQ(r.grip, 1.0);
   // Released: release_grip at once (its first tick of decay already applied), then
   // back to 1 with grip_decay_time.
-  const inhand::ForceLayerParams<double>& p = layer.params();
   const double first = 1.0 + (p.release_grip - 1.0) * std::exp(-1e-3 / p.grip_decay_time);
   layer.update(g.step(1e-3, true), r);
   EXPECT_NEAR(r.grip, first, 1e-12);
@@ -398,6 +423,42 @@ TEST(ForceLayer, GripStartsAtReleaseGripAndDecays) {
   layer.update(g.step(1e-3, false), r);
   layer.update(g.step(1e-3, true), r);
   EXPECT_NEAR(r.grip, first, 1e-12);
+}
+
+TEST(ForceLayer, SlipRaiseDecaysToTheHeldReleaseGrip) {
+  // A slip raises the grip above the release grip; once it stops the raise decays with
+  // grip_decay_time to the release grip, not below it.
+  Grasp g;
+  Layer layer;
+  const inhand::ForceLayerParams<double>& p = layer.params();
+  Layer::Result r;
+  for (int t = 0; t < 10; ++t) layer.update(g.step(1e-3, false), r);
+  layer.update(g.step(1e-3, true), r);
+  ASSERT_EQ(r.grip, p.release_grip);
+  // The first finger slides along the object at 20 mm/s for 50 ms (its fingertip and its
+  // contact point move together, the object stays); no cap on the grip here.
+  const auto free_step = [&g] {
+    Layer::Step step = g.step(1e-3, true);
+    step.max_force = 100.0;
+    return step;
+  };
+  g.steps(0, 0) = 2e-5;
+  for (int t = 0; t < 50; ++t) {
+    g.points(0, 0) += 2e-5;
+    layer.update(free_step(), r);
+  }
+  g.steps.setZero();
+  EXPECT_TRUE(inhand::has(r.status, inhand::ForceLayerStatus::slipping));
+  EXPECT_GT(r.grip, p.friction_margin * p.release_grip - 1e-9);
+  double raised = r.grip;  // the slip filters still flag a few ticks: the peak comes later
+  const int ticks = static_cast<int>(5.0 * p.grip_decay_time / 1e-3);
+  for (int t = 0; t < ticks; ++t) {
+    layer.update(free_step(), r);
+    raised = std::max(raised, r.grip);
+  }
+  EXPECT_FALSE(inhand::has(r.status, inhand::ForceLayerStatus::slipping));
+  EXPECT_NEAR(r.grip, p.release_grip, 1e-2 * (raised - p.release_grip));
+  EXPECT_GE(r.grip, p.release_grip);
 }
 
 TEST(ForceLayer, GripRisesOnSlipAndDecays) {
@@ -741,9 +802,13 @@ TEST(ForceLayer, ForceLoopGainFollowsTheServo) {
 
 TEST(ForceLayer, GripStartsAtTheGraspsGripWhenGiven) {
   // Step::release_grip (the grasp's s_g, sized for the release load) replaces
-  // ForceLayerParams::release_grip on the first free tick, then decays the same way.
+  // ForceLayerParams::release_grip on the first free tick, then decays the same way
+  // (hold_release_grip false; held, it stays: GripHoldsTheReleaseGripWhileFree).
   Grasp g;
+  inhand::ForceLayerParams<double> decaying;
+  decaying.hold_release_grip = false;
   Layer layer;
+  layer.set_params(decaying);
   Layer::Result r;
   for (int t = 0; t < 10; ++t) layer.update(g.step(1e-3, false), r);
   Layer::Step step = g.step(1e-3, true);
@@ -754,6 +819,7 @@ TEST(ForceLayer, GripStartsAtTheGraspsGripWhenGiven) {
   EXPECT_NEAR(r.grip, 1.0 + 2.5 * std::exp(-1e-3 / tau), 1e-12);
   // Below ForceLayerParams::release_grip it is still what the grasp pressed with.
   Layer again;
+  again.set_params(decaying);
   for (int t = 0; t < 10; ++t) again.update(g.step(1e-3, false), r);
   step.release_grip = 1.25;
   again.update(step, r);

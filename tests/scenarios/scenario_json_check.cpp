@@ -529,6 +529,7 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
         fb.servo_stiffness,  fb.servo_damping,   fb.release_load,    fb.capacity_slide_ratio};
     for (std::size_t k = 0; k < 20; ++k)
       EXPECT_EQ(got_fl[k], want_fl[k]) << "force_layer field " << k;
+    EXPECT_EQ(fa.hold_release_grip, fb.hold_release_grip);
     EXPECT_TRUE(f.gravity_from_plant);  // "plant": the plant's gravity, told
     EXPECT_EQ(fa.gravity_direction, got.plant.gravity);
   }

@@ -26,28 +26,26 @@
 // with k_i [N/m] the online estimate of the contact stiffness (StiffnessEstimator,
 // contact_observers.hpp; max_stiffness until the fit is trusted). A joint servo in series
 // (servo_stiffness, servo_damping) adds its stiffness in series and its damping as a
-// feedthrough: joint_servo.hpp, force_loop_gain(). With k_i = k the loop crosses over at w_c
-// whatever the stiffness; the discrete loop with one tick of command delay,
-// z^2 - z + a = 0, a = rho w_c T, is stable for a < 1: at the default w_c = 40 rad/s
-// and T = 1 ms a stiffness under-estimated by up to rho = 25 times is still stable
+// feedthrough (joint_servo.hpp, force_loop_gain()). With k_i = k the loop crosses over at w_c
+// whatever the stiffness; with one tick of command delay, z^2 - z + a = 0, a = rho w_c T, it
+// is stable for a < 1: at w_c = 40 rad/s, T = 1 ms, for k_i up to rho = 25 times too low
 // (docs/force_layer.md gives the phase margin with actuator lag).
 // The contact's damping c [N s/m] answers a commanded velocity within the tick: the loop
-// through it, f_{n+1} = ... - c kp f_n (kp = w_c / k_i), oscillates at period 2 once
-// c kp >= 1 (500 N/m, 10 N s/m: c kp = 0.8, 1.1 with k_i 27 % low). So kp <= 1 / (2 c) (c:
-// the larger of contact_damping and the servo's feedthrough): the loop then crosses over
-// below w_c on a damped contact (at k / (2 c)).
+// through it, f_{n+1} = ... - c kp f_n (kp = w_c / k_i), oscillates at period 2 once c kp >= 1,
+// so kp <= 1 / (2 c) (c: the larger of contact_damping and the servo's feedthrough).
 //
 // Grip that follows the load. s is the largest of
 //   1                 the nominal grip (the planner's pattern);
-//   s_release   Step::release_grip (the grasp's s_g, release_grip.hpp; 0: release_grip) on the
-//               first free tick, decaying to 1 like s_slip: the load the held object hid
-//               arrives at release as a step, faster than a slip is felt and answered;
+//   s_release   Step::release_grip (the grasp's s_g, release_grip.hpp; 0: release_grip) from
+//               the first free tick, kept while the object is free (hold_release_grip; false:
+//               decaying like s_slip): the load the held object hid arrives at release as a
+//               step, faster than a slip is felt, and stays (its weight; friction's share unseen);
 //   s_min_force the least s for which every target s (P_int q)_i + (P_r f_m)_i is at least
 //               min_force: a normal load taken from a finger is given back by squeezing;
 //   s_slip      raised at grip_rise_rate per second while any finger slips, and at a slip
 //               onset at once to friction_margin times the grip at which it slipped (that
-//               grip was at the friction cone's edge, eq. 8); back to 1 with time constant
-//               grip_decay_time once the slip stops (the grip falls when the load goes);
+//               grip was at the friction cone's edge, eq. 8); back to 1 (or the held s_release)
+//               with time constant grip_decay_time once the slip stops (falls when the load goes);
 // capped at the largest s for which no target exceeds max_force. `beyond_capacity` (the load
 // exceeds what the hand can hold with this friction) is raised when min_force has been out of
 // reach for capacity_time (a release's step passes through it for a few ticks), or when a
@@ -141,11 +139,10 @@ class ForceLayer {
     stiffness_.reset(params_.max_stiffness);
     was_touching_.setZero();
     motion_.reset();
-    grip_slip_ = Scalar(1);
+    grip_slip_ = grip_floor_ = Scalar(1);
     was_slipping_ = was_free_ = false;
     short_time_ = capped_slip_time_ = capped_slide_peak_ = Scalar(0);
   }
-
   const ForceVector& stiffness_estimate() const noexcept { return stiffness_.estimate(); }
   /// The contact stiffness [N/m] for the press direction (StiffnessEstimator::press()).
   const ForceVector& press_stiffness() const noexcept { return stiffness_.press(); }
@@ -235,6 +232,7 @@ class ForceLayer {
     bool short_of_min = false, over_max = false;  // short: min_force out of reach
     if (in.object_free) {
       const Scalar s_release = in.release_grip > Scalar(0) ? in.release_grip : p.release_grip;
+      if (!was_free_) grip_floor_ = p.hold_release_grip ? s_release : Scalar(1);
       if (!was_free_) grip_slip_ = std::max(grip_slip_, s_release);
       for (int i = 0; i < n_; ++i) {
         if (!(*in.touching)(i)) continue;
@@ -251,11 +249,12 @@ class ForceLayer {
         if (!was_slipping_) grip_slip_ = std::max(grip_slip_, p.friction_margin * grip_);
         grip_slip_ += p.grip_rise_rate * in.dt;
       } else {
-        grip_slip_ = Scalar(1) + (grip_slip_ - Scalar(1)) * std::exp(-in.dt / p.grip_decay_time);
+        grip_slip_ =
+            grip_floor_ + (grip_slip_ - grip_floor_) * std::exp(-in.dt / p.grip_decay_time);
       }
       was_slipping_ = slipping;
     } else {
-      grip_slip_ = Scalar(1);
+      grip_slip_ = grip_floor_ = Scalar(1);
       was_slipping_ = false;
     }
     was_free_ = in.object_free;
@@ -291,6 +290,7 @@ class ForceLayer {
   ContactMotion<Scalar, Dim, NumFingers> motion_{};
   ForceVector e_, q_int_, r_load_;  ///< per-tick scratch (preallocated)
   Scalar grip_ = Scalar(1), grip_slip_ = Scalar(1);
+  Scalar grip_floor_ = Scalar(1);         ///< what s_slip decays to: 1 or the held s_release
   Scalar short_time_ = Scalar(0);         ///< s min_force has been out of reach
   Scalar capped_slip_time_ = Scalar(0);   ///< s a finger has slipped with the cap binding
   Scalar capped_slide_peak_ = Scalar(0);  ///< [m] the largest slide lead since then

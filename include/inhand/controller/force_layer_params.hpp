@@ -26,11 +26,15 @@ struct ForceLayerParams {
   Scalar grip_rise_rate = Scalar(50);          ///< [1/s], rise of s while slipping
   Scalar friction_margin = Scalar(1.5);        ///< >= 1, grip after a slip onset / grip at onset
   Scalar grip_decay_time = Scalar(20);         ///< [s], s_slip back to 1 once the slip stops
-  Scalar release_grip = Scalar(2);             ///< >= 1, s when the object is released (decays)
-  Scalar release_load = Scalar(4);             ///< [N], load the release grip is sized for
-  Scalar rigid_tolerance = Scalar(0.1);        ///< eps, dimensionless (see the file comment)
-  Scalar contact_damping = Scalar(10);         ///< c [N s/m], largest expected; 0: no gain cap
-  Scalar capacity_time = Scalar(0.02);  ///< [s], slip at the grip's cap before beyond_capacity
+  Scalar release_grip = Scalar(2);             ///< >= 1, s when the object is released
+  /// true: the grip at release (the grasp's s_g, or release_grip) stays the grip's floor while
+  /// the object is free (the load it is sized for, the weight, stays); false: it decays to 1
+  /// with grip_decay_time, as a slip's raise does (force_layer.hpp, docs/force_layer.md).
+  bool hold_release_grip = true;
+  Scalar release_load = Scalar(4);       ///< [N], load the release grip is sized for
+  Scalar rigid_tolerance = Scalar(0.1);  ///< eps, dimensionless (see the file comment)
+  Scalar contact_damping = Scalar(10);   ///< c [N s/m], largest expected; 0: no gain cap
+  Scalar capacity_time = Scalar(0.02);   ///< [s], slip at the grip's cap before beyond_capacity
   /// in [0, 1]: beyond_capacity also needs the slide at the cap running at least this
   /// fraction of its fastest since the cap began to bind (a settling pad's shear slows
   /// down; force_layer.hpp). 0: any slide.
