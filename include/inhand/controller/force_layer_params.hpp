@@ -25,7 +25,7 @@ struct ForceLayerParams {
   Scalar slip_distance = Scalar(3e-4);         ///< [m], see the file comment
   Scalar grip_rise_rate = Scalar(50);          ///< [1/s], rise of s while slipping
   Scalar friction_margin = Scalar(1.5);        ///< >= 1, grip after a slip onset / grip at onset
-  Scalar grip_decay_time = Scalar(20);         ///< [s], s_slip back to 1 once the slip stops
+  Scalar grip_decay_time = Scalar(20);         ///< [s], s_slip back to 1 (or s_g held) after a slip
   Scalar release_grip = Scalar(2);             ///< >= 1, s when the object is released
   /// true: the grip at release (the grasp's s_g, or release_grip) stays the grip's floor while
   /// the object is free (the load it is sized for, the weight, stays); false: it decays to 1
