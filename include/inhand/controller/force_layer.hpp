@@ -139,7 +139,7 @@ class ForceLayer {
     stiffness_.reset(params_.max_stiffness);
     was_touching_.setZero();
     motion_.reset();
-    grip_slip_ = grip_floor_ = Scalar(1);
+    grip_slip_ = Scalar(1);
     was_slipping_ = was_free_ = false;
     short_time_ = capped_slip_time_ = capped_slide_peak_ = Scalar(0);
   }
@@ -232,7 +232,8 @@ class ForceLayer {
     bool short_of_min = false, over_max = false;  // short: min_force out of reach
     if (in.object_free) {
       const Scalar s_release = in.release_grip > Scalar(0) ? in.release_grip : p.release_grip;
-      if (!was_free_) grip_floor_ = p.hold_release_grip ? s_release : Scalar(1);
+      const Scalar grip_floor =
+          p.hold_release_grip ? s_release : Scalar(1);  // what s_slip decays to
       if (!was_free_) grip_slip_ = std::max(grip_slip_, s_release);
       for (int i = 0; i < n_; ++i) {
         if (!(*in.touching)(i)) continue;
@@ -249,12 +250,11 @@ class ForceLayer {
         if (!was_slipping_) grip_slip_ = std::max(grip_slip_, p.friction_margin * grip_);
         grip_slip_ += p.grip_rise_rate * in.dt;
       } else {
-        grip_slip_ =
-            grip_floor_ + (grip_slip_ - grip_floor_) * std::exp(-in.dt / p.grip_decay_time);
+        grip_slip_ = grip_floor + (grip_slip_ - grip_floor) * std::exp(-in.dt / p.grip_decay_time);
       }
       was_slipping_ = slipping;
     } else {
-      grip_slip_ = grip_floor_ = Scalar(1);
+      grip_slip_ = Scalar(1);
       was_slipping_ = false;
     }
     was_free_ = in.object_free;
@@ -290,7 +290,6 @@ class ForceLayer {
   ContactMotion<Scalar, Dim, NumFingers> motion_{};
   ForceVector e_, q_int_, r_load_;  ///< per-tick scratch (preallocated)
   Scalar grip_ = Scalar(1), grip_slip_ = Scalar(1);
-  Scalar grip_floor_ = Scalar(1);         ///< what s_slip decays to: 1 or the held s_release
   Scalar short_time_ = Scalar(0);         ///< s min_force has been out of reach
   Scalar capped_slip_time_ = Scalar(0);   ///< s a finger has slipped with the cap binding
   Scalar capped_slide_peak_ = Scalar(0);  ///< [m] the largest slide lead since then
