@@ -10,13 +10,14 @@
 // A case succeeds when the grasp completes, the object is not dropped, no contact is
 // lost, and the task stage meets the campaign bounds (see kBounds).
 // Output: one line per failing case (with its seed, and which of the warnings that say
-// the object may be lost -- release_grip_capped, beyond_capacity, workspace_limited -- came
-// first, how long before the first contact opened), a summary table, how many failures were
-// so warned and how many successes raised the same warnings; exit code 1 when the success
-// rate is below --min-success. Each case's task is also checked for reach from the hand's
-// kinematics alone (campaign_reach.hpp): a task whose path some touching fingertip cannot
-// follow within its joints' limits is said to be beyond the hand's reach (in its line, and
-// counted among failures and successes; the success rate counts every case as drawn).
+// the object may be lost -- release_grip_capped, beyond_capacity, workspace_limited,
+// object_astray -- came first, how long before the first contact opened), a summary table,
+// how many failures were so warned and how many successes raised the same warnings; exit
+// code 1 when the success rate is below --min-success. Each case's task is also checked
+// for reach from the hand's kinematics alone (campaign_reach.hpp): a task whose path some
+// touching fingertip cannot follow within its joints' limits is said to be beyond the
+// hand's reach (in its line, and counted among failures and successes; the success rate
+// counts every case as drawn).
 // `--first-seed S --count 1 --trace F.csv`
 // writes case S's per-tick trace (the columns of inhand_scenario's trace.csv), to see
 // why a seed fails.
@@ -44,7 +45,8 @@ using inhand::examples::campaign::make_case;
 
 /// The controller's warnings that say the object may be lost (docs/force_layer.md): the
 /// grip at release capped below what release_load asks, the load beyond the grip's cap,
-/// the task asking a held joint for more than it can give.
+/// the task asking a held joint for more than it can give, the object far from its desired
+/// pose for a while.
 struct Foretelling {
   inhand::ControllerWarning flag;
   const char* name;
@@ -53,6 +55,7 @@ constexpr Foretelling kForetelling[] = {
     {inhand::ControllerWarning::release_grip_capped, "release_grip_capped"},
     {inhand::ControllerWarning::beyond_capacity, "beyond_capacity"},
     {inhand::ControllerWarning::workspace_limited, "workspace_limited"},
+    {inhand::ControllerWarning::object_astray, "object_astray"},
 };
 constexpr int kForetold = static_cast<int>(sizeof kForetelling / sizeof kForetelling[0]);
 

@@ -20,9 +20,10 @@
 //   must_complete              the stage completed (a grasp reached `grasped`)
 //   min_warning_lead [s]       where the stage lost a contact (a finger the controller
 //                              reports reacquiring: contact_lost), ControllerWarning::
-//                              beyond_capacity was raised at least this long before the
-//                              first such tick; where it dropped the object without one, it
-//                              was raised in the stage. A stage that lost nothing passes.
+//                              beyond_capacity or object_astray (the earlier) was raised at
+//                              least this long before the first such tick; where it dropped
+//                              the object without one, one was raised in the stage. A stage
+//                              that lost nothing passes.
 //                              Needs the controller's warning times (StageWarningTimes):
 //                              a runner that does not record them reports a violation.
 // A stage named in "expect" that did not run (the run stopped early) is a violation.
@@ -50,11 +51,12 @@ struct StageExpectation {
   std::optional<bool> must_not_drop, must_drop, must_complete;
 };
 
-/// When the controller first raised ControllerWarning::beyond_capacity and first reported
-/// a lost contact in one stage: s into the stage, -1 for never (force_layer_summary.hpp).
+/// When the controller first raised ControllerWarning::beyond_capacity, first reported
+/// a lost contact and first raised ControllerWarning::object_astray in one stage: s into
+/// the stage, -1 for never (force_layer_summary.hpp).
 struct StageWarningTimes {
   std::string stage;
-  double first_beyond_capacity = -1.0, first_contact_lost = -1.0;
+  double first_beyond_capacity = -1.0, first_contact_lost = -1.0, first_object_astray = -1.0;
 };
 
 struct Expectations {
@@ -164,17 +166,22 @@ inline void check_warning_lead(std::vector<std::string>& out, const StageExpecta
     out.push_back(where + "min_warning_lead: the controller's warning times were not recorded");
     return;
   }
-  const double warned = w->first_beyond_capacity, lost = w->first_contact_lost;
+  // The earlier of the two warnings raised (-1: neither), and its name.
+  const double capacity = w->first_beyond_capacity, astray = w->first_object_astray;
+  const bool by_astray = astray >= 0.0 && (capacity < 0.0 || astray < capacity);
+  const double warned = by_astray ? astray : capacity, lost = w->first_contact_lost;
+  const std::string name = by_astray ? "object_astray" : "beyond_capacity";
   if (lost >= 0.0) {
     if (warned < 0.0 || warned > lost)
       out.push_back(where + "a contact was lost at " + fmt(lost) +
-                    " s with no beyond_capacity warning before it");
+                    " s with no beyond_capacity or object_astray warning before it");
     else if (!(lost - warned >= *e.min_warning_lead))
-      out.push_back(where + "beyond_capacity raised " + fmt(lost - warned) +
+      out.push_back(where + name + " raised " + fmt(lost - warned) +
                     " s before the first contact lost, less than " + fmt(*e.min_warning_lead) +
                     " s");
   } else if (m.dropped && warned < 0.0) {
-    out.push_back(where + "the object was dropped with no beyond_capacity warning");
+    out.push_back(where +
+                  "the object was dropped with no beyond_capacity or object_astray warning");
   }
 }
 }  // namespace detail

@@ -29,6 +29,8 @@ struct ForceLayerStageSummary {
   long slip_ticks = 0;  ///< ticks with any finger slipping
   long beyond_capacity_ticks = 0;
   double first_beyond_capacity = -1.0;  ///< s into the stage, -1: never
+  long object_astray_ticks = 0;         ///< ticks with ControllerWarning::object_astray
+  double first_object_astray = -1.0;    ///< s into the stage, -1: never
   /// s into the stage of the first tick a finger was FingerState::reacquiring (the
   /// controller lost its contact: ControllerStatus::contact_lost), -1: never
   double first_contact_lost = -1.0;
@@ -62,6 +64,10 @@ class ForceLayerSummaryAccumulator {
     if (has(out.warnings, ControllerWarning::beyond_capacity)) {
       if (s.beyond_capacity_ticks == 0) s.first_beyond_capacity = stage_time;
       ++s.beyond_capacity_ticks;
+    }
+    if (has(out.warnings, ControllerWarning::object_astray)) {
+      if (s.object_astray_ticks == 0) s.first_object_astray = stage_time;
+      ++s.object_astray_ticks;
     }
     for (const auto& f : out.fingers)
       if (f.state == FingerState::reacquiring && s.first_contact_lost < 0.0)

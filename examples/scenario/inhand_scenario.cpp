@@ -193,6 +193,8 @@ ex::Json summary_document(const ex::RunSummary& summary, const ip::ScenarioResul
                   {"slip_ticks", s.slip_ticks},
                   {"beyond_capacity_ticks", s.beyond_capacity_ticks},
                   {"first_beyond_capacity", drift(s.first_beyond_capacity)},
+                  {"object_astray_ticks", s.object_astray_ticks},
+                  {"first_object_astray", drift(s.first_object_astray)},
                   {"first_contact_lost", drift(s.first_contact_lost)},
                   {"max_abs_force_integral", s.max_abs_force_integral},
                   {"final_load", vec(s.final_load)},
@@ -505,7 +507,8 @@ int run_scenario(const Options& o) {
   summary.failure = result.failure;
   std::vector<ex::StageWarningTimes> warning_times;
   for (const ex::ForceLayerStageSummary<3>& s : force_layer.stages())
-    warning_times.push_back({s.stage, s.first_beyond_capacity, s.first_contact_lost});
+    warning_times.push_back(
+        {s.stage, s.first_beyond_capacity, s.first_contact_lost, s.first_object_astray});
   summary.violations = ex::check_expectations(sf.expect, result.stages, &warning_times);
   for (std::string& v : ex::check_fault_expectations(sf.fault_expect, result.faults))
     summary.violations.push_back(std::move(v));

@@ -233,6 +233,10 @@ inline plant::HandController::Config read_controller(ObjectReader r, bool& gravi
         f.limit("position_integral_band", pf.position_integral_band, Range::positive_up_to(10.0));
     pf.orientation_integral_band = f.limit(
         "orientation_integral_band", pf.orientation_integral_band, Range::positive_up_to(100.0));
+    pf.astray_distance =
+        f.limit("astray_distance", pf.astray_distance, Range::positive_up_to(10.0));
+    pf.astray_angle = f.limit("astray_angle", pf.astray_angle, Range::positive_up_to(100.0));
+    pf.astray_time = f.number("astray_time", pf.astray_time, Range::non_negative_up_to(3600.0));
     f.finish();
   }
   {

@@ -553,6 +553,15 @@ TEST(ReactiveControllerConfig, ValidateNamesTheOffendingField) {
       {"NaN orientation integral band",
        [](PlanarCtrl::Config& c) { c.pose_feedback.orientation_integral_band = kNaN; },
        "pose_feedback.orientation_integral_band", -1, -1},
+      {"zero astray distance", [](PlanarCtrl::Config& c) { c.pose_feedback.astray_distance = 0.0; },
+       "pose_feedback.astray_distance", -1, -1},
+      {"NaN astray angle", [](PlanarCtrl::Config& c) { c.pose_feedback.astray_angle = kNaN; },
+       "pose_feedback.astray_angle", -1, -1},
+      {"infinite astray time",
+       [](PlanarCtrl::Config& c) {
+         c.pose_feedback.astray_time = std::numeric_limits<double>::infinity();
+       },
+       "pose_feedback.astray_time", -1, -1},
       {"negative position gain",
        [](PlanarCtrl::Config& c) { c.pose_feedback.position_gain = -1.0; },
        "pose_feedback.position_gain", -1, -1},

@@ -462,6 +462,15 @@ TEST(ObjectTrajectory, SegmentsThatWouldOverflowAreRefused) {
 }
 
 // ---------------------------------------------------------------------------
+/// The measured pose whose error from `desired` is e: pose_error(desired, result) = e.
+Pose<double, 3> measured_with_error(const Pose<double, 3>& desired,
+                                    const inhand::Twist<double, 3>& e) {
+  Pose<double, 3> m = desired;
+  m.position -= e.head<3>();
+  m.rotation = inhand::rotation_exp<double>(V3(-e.tail<3>())) * desired.rotation;
+  return m;
+}
+
 // The pose loop's integral band (PoseFeedback::position_integral_band,
 // orientation_integral_band; pose_feedback.hpp). (1) An error inside both bands is integrated
 // as by a loop without bands, bitwise; beyond a band, that part of the integral grows by dt b
@@ -486,12 +495,7 @@ TEST(PoseLoop, IntegralBandBoundsTheTransientsShareAndKeepsTheEquilibrium) {
   const Tw zero = Tw::Zero();
   Pose<double, 3> desired;
   desired.position = V3(0.01, -0.02, 0.15);
-  auto measured_at = [&](const Tw& e) {  // pose_error(desired, measured) = e
-    Pose<double, 3> m = desired;
-    m.position -= e.head<3>();
-    m.rotation = inhand::rotation_exp<double>(V3(-e.tail<3>())) * desired.rotation;
-    return m;
-  };
+  auto measured_at = [&](const Tw& e) { return measured_with_error(desired, e); };
   auto rng = inhand_test::make_rng(2207);
   for (int c = 0; c < scaled(20); ++c) {
     const std::string at = "case " + std::to_string(c);
@@ -648,6 +652,69 @@ TEST(PoseLoop, HeldIntegralDoesNotWindUpAlongTheCutAndIntegratesAcrossIt) {
       }
     }
   }
+}
+
+// The astray report (PoseFeedback::astray_distance, astray_angle, astray_time;
+// pose_feedback.hpp): over random errors and bounds, `astray` is raised exactly on the ticks
+// on which the position error's norm has been at least astray_distance, or the orientation
+// error's at least astray_angle, on every tick of the last astray_time (the ticks' dt summed as
+// the loop sums them); a tick back inside both bounds clears it and starts the count again;
+// +infinity never raises it; reset() clears the count.
+TEST(PoseLoop, AstrayOnlyAfterTheErrorStaysBeyondItsBoundsForTheTime) {
+  using Loop = inhand::PoseLoop<double, 3>;
+  using Tw = Loop::TwistT;
+  const double dt = 1e-3;
+  Pose<double, 3> desired;
+  desired.position = V3(-0.01, 0.02, 0.1);
+  auto measured_at = [&](const Tw& e) { return measured_with_error(desired, e); };
+  auto rng = inhand_test::make_rng(2311);
+  int raised = 0, cleared = 0;
+  for (int c = 0; c < scaled(40); ++c) {
+    const std::string at = "case " + std::to_string(c);
+    inhand::PoseFeedback<double> pf;
+    pf.astray_distance = inhand_test::uniform<double>(rng, 1e-3, 5e-3);
+    pf.astray_angle = inhand_test::uniform<double>(rng, 0.02, 0.2);
+    pf.astray_time = c % 5 == 0 ? 0.0 : inhand_test::uniform<double>(rng, 2e-3, 2e-2);
+    inhand::PoseFeedback<double> never = pf;
+    never.astray_distance = never.astray_angle = std::numeric_limits<double>::infinity();
+    Loop loop, off;
+    double held = 0.0;  // the sum of dt over the ticks beyond a bound, as the loop sums it
+    bool before = false;
+    int phase = 0, left = 0;
+    for (int t = 0; t < 300; ++t) {
+      // Runs of 1-30 ticks: inside both bounds, beyond in position, in orientation, or both.
+      if (left-- == 0) {
+        phase = static_cast<int>(inhand_test::uniform<double>(rng, 0.0, 3.999));
+        left = static_cast<int>(inhand_test::uniform<double>(rng, 1.0, 30.999));
+      }
+      const bool fp = phase == 1 || phase == 3, fr = phase == 2 || phase == 3;
+      const double sp = fp ? inhand_test::uniform<double>(rng, 1.001, 3.0)
+                           : inhand_test::uniform<double>(rng, 0.0, 0.999);
+      const double sr = fr ? inhand_test::uniform<double>(rng, 1.001, 3.0)
+                           : inhand_test::uniform<double>(rng, 0.0, 0.999);
+      Tw e;
+      e << sp * pf.astray_distance * inhand_test::random_unit_vector<double, 3>(rng),
+          sr * pf.astray_angle * inhand_test::random_unit_vector<double, 3>(rng);
+      const inhand::PoseLoopStep<double, 3> step =
+          loop.update(pf, desired, Tw::Zero(), measured_at(e), dt);
+      held = fp || fr ? held + dt : 0.0;
+      const bool expect = (fp || fr) && held >= pf.astray_time;
+      ASSERT_EQ(step.astray, expect) << at << ", tick " << t << ", beyond for " << held << " s";
+      EXPECT_FALSE(off.update(never, desired, Tw::Zero(), measured_at(e), dt).astray) << at;
+      raised += step.astray ? 1 : 0;
+      cleared += before && !step.astray ? 1 : 0;
+      before = step.astray;
+    }
+    // reset() starts the count again: one tick beyond raises it only with astray_time 0.
+    loop.reset();
+    Tw far;
+    far << 2.0 * pf.astray_distance * V3::UnitX(), V3::Zero();
+    EXPECT_EQ(loop.update(pf, desired, Tw::Zero(), measured_at(far), dt).astray,
+              pf.astray_time <= dt)
+        << at;
+  }
+  EXPECT_GT(raised, 0);   // the sweep raised it
+  EXPECT_GT(cleared, 0);  // and cleared it
 }
 
 }  // namespace

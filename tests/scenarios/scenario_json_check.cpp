@@ -171,7 +171,8 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
                         "max_angular_speed": 0.9, "position_integral_gain": 9,
                         "orientation_integral_gain": 11, "position_integral_limit": 1e-3,
                         "orientation_integral_limit": 0.01, "position_integral_band": 2e-4,
-                        "orientation_integral_band": null},
+                        "orientation_integral_band": null, "astray_distance": 5e-3,
+                        "astray_angle": null, "astray_time": 0.02},
       "servo": {"motion": {"kp": 1.1, "ki": 0.5, "integral_limit": 0.2, "output_limit": null},
                 "force": {"kp": 0.03, "ki": 0.25, "integral_limit": 3, "output_limit": 0.1}},
       "ik": {"singular_threshold": 4e-3, "max_damping": 6e-3},
@@ -262,6 +263,9 @@ TEST(ScenarioJson, EveryGivenFieldIsApplied) {
   EXPECT_EQ(c.pose_feedback.orientation_integral_limit, 0.01);
   EXPECT_EQ(c.pose_feedback.position_integral_band, 2e-4);
   EXPECT_TRUE(std::isinf(c.pose_feedback.orientation_integral_band));
+  EXPECT_EQ(c.pose_feedback.astray_distance, 5e-3);
+  EXPECT_TRUE(std::isinf(c.pose_feedback.astray_angle));  // null: never
+  EXPECT_EQ(c.pose_feedback.astray_time, 0.02);
   EXPECT_EQ(c.servo.motion.kp, 1.1);
   EXPECT_EQ(c.servo.motion.ki, 0.5);
   EXPECT_EQ(c.servo.motion.integral_limit, 0.2);
@@ -548,6 +552,9 @@ TEST(ScenarioJson, ReadmeExampleShowsTheDefaults) {
             dc.pose_feedback.orientation_integral_limit);
   EXPECT_EQ(c.pose_feedback.position_integral_band, dc.pose_feedback.position_integral_band);
   EXPECT_EQ(c.pose_feedback.orientation_integral_band, dc.pose_feedback.orientation_integral_band);
+  EXPECT_EQ(c.pose_feedback.astray_distance, dc.pose_feedback.astray_distance);
+  EXPECT_EQ(c.pose_feedback.astray_angle, dc.pose_feedback.astray_angle);
+  EXPECT_EQ(c.pose_feedback.astray_time, dc.pose_feedback.astray_time);
   EXPECT_EQ(c.pose_feedback.max_linear_speed, dc.pose_feedback.max_linear_speed);
   EXPECT_EQ(c.pose_feedback.max_angular_speed, dc.pose_feedback.max_angular_speed);
   for (const auto* pair : {&c.servo.motion, &c.servo.force}) {
@@ -1159,15 +1166,29 @@ TEST(Expectations, MinWarningLeadAsksForTheWarningBeforeTheFirstContactLost) {
     w[1].first_beyond_capacity = late;
     v = violations(&w);
     ASSERT_EQ(v.size(), 1u);
-    EXPECT_NE(v[0].find("no beyond_capacity warning before it"), std::string::npos) << v[0];
+    EXPECT_NE(v[0].find("no beyond_capacity or object_astray warning before it"), std::string::npos)
+        << v[0];
   }
+  // object_astray counts as the warning too, the earlier of the two setting the lead.
+  w[1].first_object_astray = 0.04;  // 60 ms before the loss, beyond_capacity never
+  EXPECT_TRUE(violations(&w).empty());
+  w[1].first_object_astray = 0.08;
+  v = violations(&w);
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_NE(v[0].find("'hold': object_astray raised 0.02 s before"), std::string::npos) << v[0];
+  w[1].first_beyond_capacity = 0.03;  // earlier than object_astray: it sets the lead
+  EXPECT_TRUE(violations(&w).empty());
   w[1] = {"hold", -1.0, -1.0};  // nothing lost, nothing dropped: no warning needed
   EXPECT_TRUE(violations(&w).empty());
   ms[1].dropped = true;  // dropped without a contact reported lost: warned at all
   v = violations(&w);
   ASSERT_EQ(v.size(), 1u);
-  EXPECT_NE(v[0].find("dropped with no beyond_capacity warning"), std::string::npos) << v[0];
+  EXPECT_NE(v[0].find("dropped with no beyond_capacity or object_astray warning"),
+            std::string::npos)
+      << v[0];
   w[1].first_beyond_capacity = 0.5;
+  EXPECT_TRUE(violations(&w).empty());
+  w[1] = {"hold", -1.0, -1.0, 0.5};  // or object_astray
   EXPECT_TRUE(violations(&w).empty());
   // A runner that does not record the warning times cannot check the bound.
   v = violations(nullptr);

@@ -161,6 +161,7 @@ ControllerStatus manipulation_phase(
       st.pose_loop.update(t.config.pose_feedback, sample.pose, sample.twist, t.object, t.dt);
   if (pose.integral_limited) w |= ControllerWarning::pose_integral_limited;
   if (pose.twist_limited) w |= ControllerWarning::twist_limited;
+  if (pose.astray) w |= ControllerWarning::object_astray;
   out.pose_error = pose.pose_error;
   out.pose_error_integral = st.pose_loop.integral();
   // Layer 2: the planner's force pattern, then the force layer.

@@ -159,6 +159,12 @@ enum class ControllerWarning : unsigned {
   /// grasp phase and after: some finger approached past the measured object's centre
   /// without touching it and is left out (FingerState::missed; grasp.hpp)
   grasp_finger_missed = 1u << 21,
+  /// manipulation: the measured object has been at least pose_feedback.astray_distance
+  /// (or astray_angle) from its desired pose for astray_time (pose_feedback.hpp): the
+  /// hand is not carrying it where the task wants it, whatever the cause (its servos
+  /// yielding under the load, friction, a push, a joint at its limit); it may be lost.
+  /// Reported only: nothing in the controller acts on it
+  object_astray = 1u << 22,
 };
 template <>
 struct is_flags<ControllerWarning> : std::true_type {};

@@ -21,6 +21,12 @@
 // beyond), gives E' = -K_p |e'|^2 <= 0, so every error returns to the one equilibrium e = 0,
 // K_i I = -d, for any b > 0 (docs/method.md section 3). Inside the band the loop is the
 // linear PI, s^2 + K_p s + K_i (poles -1.55 and -6.45 /s at the defaults).
+//
+// Astray. The loop reports `astray` once the position error's norm has stayed at or beyond
+// astray_distance, or the orientation error's beyond astray_angle, for astray_time: an
+// object that far from its desired pose for that long is not being carried where the task
+// wants it, whatever the cause (the hand's servos yielding under the load, friction, a push,
+// a joint at its limit), and may be lost (docs/force_layer.md, "Astray").
 #pragma once
 
 #include <algorithm>
@@ -56,7 +62,21 @@ struct PoseFeedback {
   /// stops wind the integral as before (docs/force_layer.md, "The pose loop's integral band").
   Scalar position_integral_band = Scalar(2e-3);
   Scalar orientation_integral_band = Scalar(1e-2);
+  /// Astray (file comment): the position error's norm (m, > 0) and the orientation error's
+  /// (rad, > 0) at or beyond which, held for astray_time (s, finite, >= 0), the loop reports
+  /// the object astray (ControllerWarning::object_astray); +infinity: never. 3 mm is 1.5
+  /// times the integral band, 0.1 rad ten times; both beyond the errors of held objects in
+  /// the shipped tasks and the campaign's successes (docs/force_layer.md, "Astray").
+  Scalar astray_distance = Scalar(3e-3);
+  Scalar astray_angle = Scalar(0.1);
+  Scalar astray_time = Scalar(0.01);
   Validation validate() const noexcept {
+    if (!(astray_distance > Scalar(0)))
+      return Validation::invalid("pose_feedback.astray_distance", "must be > 0");
+    if (!(astray_angle > Scalar(0)))
+      return Validation::invalid("pose_feedback.astray_angle", "must be > 0");
+    if (!is_finite(astray_time) || astray_time < Scalar(0))
+      return Validation::invalid("pose_feedback.astray_time", "must be finite and >= 0");
     if (!is_finite(position_integral_gain) || position_integral_gain < Scalar(0))
       return Validation::invalid("pose_feedback.position_integral_gain", "must be finite and >= 0");
     if (!is_finite(orientation_integral_gain) || orientation_integral_gain < Scalar(0))
@@ -91,15 +111,20 @@ struct PoseLoopStep {
   Twist<Scalar, Dim> commanded_twist = Twist<Scalar, Dim>::Zero();
   bool integral_limited = false;  ///< a part of the integral was scaled to its bound
   bool twist_limited = false;     ///< the twist was scaled to the speed bounds
+  bool astray = false;  ///< the error beyond astray_distance or astray_angle for astray_time
 };
 
-/// The pose loop's state: the integral I of the pose error.
+/// The pose loop's state: the integral I of the pose error, and how long the error has
+/// been astray (file comment).
 template <typename Scalar, int Dim>
 class PoseLoop {
  public:
   using TwistT = Twist<Scalar, Dim>;
 
-  void reset() noexcept { integral_.setZero(); }
+  void reset() noexcept {
+    integral_.setZero();
+    astray_time_ = Scalar(0);
+  }
   const TwistT& integral() const noexcept { return integral_; }  ///< (m s; rad s)
 
   /// Conditional integration against a cut made after this loop (`pf` as in update()):
@@ -137,6 +162,10 @@ class PoseLoop {
     constexpr int R = SpatialDim<Dim>::kRot;
     PoseLoopStep<Scalar, Dim> out;
     out.pose_error = pose_error(desired, measured);
+    const bool far = !(out.pose_error.template head<Dim>().norm() < pf.astray_distance) ||
+                     !(out.pose_error.template tail<R>().norm() < pf.astray_angle);
+    astray_time_ = far ? astray_time_ + dt : Scalar(0);
+    out.astray = far && astray_time_ >= pf.astray_time;
     integral_ += dt * banded(pf, out.pose_error);
     const Scalar ip = integral_.template head<Dim>().norm();
     if (ip > pf.position_integral_limit) {
@@ -178,6 +207,7 @@ class PoseLoop {
   }
 
   TwistT integral_ = TwistT::Zero();
+  Scalar astray_time_ = Scalar(0);  ///< s the error has been at or beyond the astray bounds
 };
 
 }  // namespace inhand
